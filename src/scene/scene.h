@@ -1,0 +1,110 @@
+// Scene model: what a Tungsten scene file becomes once loaded, in world space.
+//
+// The loader (scene_loader.h) follows Tungsten's conventions (transform order, quad orientation,
+// power -> radiance) and flattens every shape into the geometric primitives the GPU traces:
+// triangles, spheres and disks. Lights are listed separately: every emissive primitive is one
+// area light, plus point lights and a constant environment.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
+
+namespace telescope {
+
+enum class BsdfType : uint32_t { Lambert = 0, Mirror = 1, Dielectric = 2, Null = 3 };
+
+struct Material {
+    std::string name;
+    BsdfType type = BsdfType::Lambert;
+    glm::vec3 albedo{1.0f};
+    float ior = 1.5f;              // dielectric only
+    bool enableRefraction = true;  // dielectric only
+};
+
+enum class GeometryType : uint32_t { Triangle = 0, Sphere = 1, Disk = 2 };
+
+// One ray-traceable primitive in world space.
+struct Geometry {
+    GeometryType type = GeometryType::Triangle;
+    glm::vec3 p0{0.0f}, p1{0.0f}, p2{0.0f};  // triangle vertices; sphere/disk: p0 = centre
+    float radius = 0.0f;                     // sphere, disk
+    glm::vec3 normal{0.0f, 1.0f, 0.0f};      // unit geometric normal (triangle, disk); the
+                                             // emitting side for one-sided emission
+    uint32_t material = 0;                   // index into Scene::materials
+    glm::vec3 emission{0.0f};                // radiance, already converted from "power"
+    uint32_t shape = 0;                      // index into Scene::shapes (the source primitive)
+};
+
+enum class LightType : uint32_t { Point = 0, Environment = 1 };
+
+// Non-geometric emitters (area lights are the emissive Geometry entries).
+struct PointLikeLight {
+    LightType type = LightType::Point;
+    glm::vec3 position{0.0f};     // point
+    glm::vec3 intensity{0.0f};    // point: radiant intensity (W/sr); environment: radiance
+    std::string name;
+};
+
+struct Camera {
+    glm::vec3 position{0.0f, 0.0f, 0.0f};
+    glm::vec3 forward{0.0f, 0.0f, 1.0f};  // unit, z axis of Tungsten's camera basis
+    glm::vec3 up{0.0f, 1.0f, 0.0f};       // unit, y axis
+    glm::vec3 right{1.0f, 0.0f, 0.0f};    // unit, image right = forward x up (Tungsten)
+    float fovDegrees = 60.0f;             // horizontal full angle
+    uint32_t width = 512, height = 512;
+    std::string filter = "tent";          // reconstruction filter name (dirac, box, tent; others sampled as tent)
+};
+
+// Settings of the debiasing telescope (ESTIMATORS.md section 1-2).
+enum class PmfType : uint32_t { Geometric = 0, PowerLaw = 1 };
+enum class DebiasEstimator : uint32_t { None = 0, SingleTerm = 1, Sum = 2 };
+
+struct PmfSettings {
+    PmfType type = PmfType::Geometric;
+    float r = 0.65f;      // geometric: p(m) = r (1-r)^m
+    float alpha = 2.0f / 3.0f;  // power law: P(N >= m) = (m+1)^(alpha-1)
+};
+
+struct DebiasSettings {
+    DebiasEstimator estimator = DebiasEstimator::None;
+    PmfSettings pmf;
+};
+
+enum class IntegratorType : uint32_t { PathTracer = 0 };
+
+struct IntegratorSettings {
+    IntegratorType type = IntegratorType::PathTracer;
+    uint32_t minBounces = 0;
+    uint32_t maxBounces = 64;
+    bool enableLightSampling = true;
+    bool enableTwoSidedShading = true;
+    DebiasSettings debias;
+};
+
+struct RendererSettings {
+    uint32_t spp = 32;
+};
+
+struct Shape {  // the source primitive, for messages and stats
+    std::string name;
+    std::string type;
+};
+
+struct Scene {
+    std::string path;                 // file it was loaded from
+    nlohmann::json document;          // the (overridden) JSON, for output metadata
+    std::vector<Material> materials;
+    std::vector<Geometry> geometry;
+    std::vector<PointLikeLight> lights;
+    std::vector<Shape> shapes;
+    Camera camera;
+    IntegratorSettings integrator;
+    RendererSettings renderer;
+    std::vector<std::string> ignoredKeys;  // JSON paths read but not used, reported once
+};
+
+}  // namespace telescope
