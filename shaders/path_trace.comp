@@ -1,0 +1,85 @@
+// path_trace: one thread per pixel traces `sampleCount` paths and accumulates the estimate,
+// its square, the base I(k) and the correction (ESTIMATORS.md section 2).
+#version 460
+#extension GL_GOOGLE_include_directive : require
+
+#include "shared/gpu_types.h"
+#include "shared/rng.h"
+#include "shared/sampling.h"
+#include "shared/path_depth.h"
+#include "accumulate.glsl"
+
+layout(local_size_x = kPathTraceGroupSize, local_size_y = kPathTraceGroupSize) in;
+
+layout(constant_id = kSpecMaxBounces) const uint kMaxBounces = 64u;
+layout(constant_id = kSpecMinBounces) const uint kMinBounces = 0u;
+layout(constant_id = kSpecDebiasMode) const uint kDebiasMode = 0u;
+layout(constant_id = kSpecPmfType) const uint kPmfType = 0u;
+layout(constant_id = kSpecPmfR) const float kPmfR = 0.65;
+layout(constant_id = kSpecPmfAlpha) const float kPmfAlpha = 0.6666667;
+layout(constant_id = kSpecHasSpheres) const bool kHasSpheres = true;
+layout(constant_id = kSpecHasDisks) const bool kHasDisks = true;
+layout(constant_id = kSpecHasSpecular) const bool kHasSpecular = true;
+layout(constant_id = kSpecLightCount) const uint kLightCount = 0u;
+layout(constant_id = kSpecLightSampling) const bool kLightSampling = true;
+layout(constant_id = kSpecTwoSided) const bool kTwoSided = true;
+layout(constant_id = kSpecFilter) const uint kFilter = kFilterTent;
+layout(constant_id = kSpecEnvironmentLight) const uint kEnvironmentLight = 0xffffffffu;
+layout(constant_id = kSpecMaxTraceDepth) const uint kMaxTraceDepth = 4096u;
+layout(constant_id = kSpecRayEpsilon) const float kRayEpsilon = 1e-5;
+
+layout(std430, binding = kBindingPrims) readonly buffer PrimBuffer { Prim prims[]; };
+layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[]; };
+layout(std430, binding = kBindingMaterials) readonly buffer MaterialBuffer { MaterialGpu materials[]; };
+layout(std430, binding = kBindingLights) readonly buffer LightBuffer { LightGpu lights[]; };
+
+layout(push_constant) uniform Push { PathTracePush pc; };
+
+#define BVH_NODE(i) nodes[i]
+#define BVH_PRIM(i) prims[i]
+#include "shared/intersect.h"
+#include "path_tracer.glsl"
+
+void main() {
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    if (pixel.x >= pc.width || pixel.y >= pc.height) return;
+    uint pixelIndex = pixel.y * pc.width + pixel.x;
+    uint pixelCount = pc.width * pc.height;
+    LevelPmf pmf = LevelPmf(kPmfType, kPmfR, kPmfAlpha);
+
+    vec3 sumZ = vec3(0.0), sumZ2 = vec3(0.0), sumBase = vec3(0.0), sumCorrection = vec3(0.0);
+    float dropped = 0.0;
+    for (uint s = 0u; s < pc.sampleCount; ++s) {
+        Rng rng = rngCreate(pixelIndex, pc.sampleBase + s, pc.seed);
+
+        // ---- Camera ray (Tungsten's pinhole: pixel (0,0) top-left, fov horizontal) ----
+        vec2 jitter = vec2(rngNext(rng), rngNext(rng));
+        if (kFilter == kFilterTent) jitter = vec2(sampleTent(jitter.x), sampleTent(jitter.y)) + 0.5;
+        else if (kFilter == kFilterDirac) jitter = vec2(0.5);
+        float w = float(pc.width);
+        vec3 local = vec3(-1.0 + 2.0 * (float(pixel.x) + jitter.x) / w,
+                          float(pc.height) / w - 2.0 * (float(pixel.y) + jitter.y) / w, pc.planeDistance);
+        vec3 dir = normalize(pc.cameraRight * local.x + pc.cameraUp * local.y + pc.cameraForward * local.z);
+
+        // ---- Level drawn per pixel sample ----
+        uint level = 0u;
+        if (kDebiasMode != kDebiasNone) level = levelSample(pmf, rngNext(rng));
+
+        PathResult r = tracePath(pc.cameraPosition, dir, level, pmf, rng);
+        vec3 z = r.base + r.correction;
+        if (any(isnan(z)) || any(isinf(z))) {
+            dropped += 1.0;
+            continue;
+        }
+        sumZ += z;
+        sumZ2 += z * z;
+        sumBase += r.base;
+        sumCorrection += r.correction;
+    }
+
+    AccumRef accum = AccumRef(uvec2(pc.accumAddressLo, pc.accumAddressHi));
+    accumulateAdd(accum, kChannelEstimate, pixelIndex, pixelCount, vec4(sumZ, dropped));
+    accumulateAdd(accum, kChannelEstimateSq, pixelIndex, pixelCount, vec4(sumZ2, 0.0));
+    accumulateAdd(accum, kChannelBase, pixelIndex, pixelCount, vec4(sumBase, 0.0));
+    accumulateAdd(accum, kChannelCorrection, pixelIndex, pixelCount, vec4(sumCorrection, 0.0));
+}

@@ -1,0 +1,122 @@
+// Data layouts shared by the host and the shaders: GPU structs, binding indices, push constants
+// and specialisation constants. Every struct is laid out as (vec3, 4-byte scalar) pairs so that
+// std430 and the C++ layout agree; the C++ side checks sizes with static_assert.
+#ifndef TELESCOPE_GPU_TYPES_H
+#define TELESCOPE_GPU_TYPES_H
+
+#include "shared/lang.h"
+
+SHADER_NAMESPACE_BEGIN
+
+// ---- Geometry (GeometryType in src/scene/scene.h) ----
+CONST uint kPrimTriangle = 0u;
+CONST uint kPrimSphere = 1u;
+CONST uint kPrimDisk = 2u;
+
+// A ray-traceable primitive. Triangle: p0, p1, p2. Sphere: centre p0, radius p1.x.
+// Disk: centre p0, radius p1.x, unit normal n. n is the geometric (emitting) normal.
+struct Prim {
+    vec3 p0; uint type;
+    vec3 p1; uint material;
+    vec3 p2; int light;      // index into the light table, -1 if not emissive
+    vec3 n;  float area;
+};
+
+// BVH node. Inner: count == 0, children first and first + 1. Leaf: prims [first, first+count).
+struct BvhNode {
+    vec3 lo; uint first;
+    vec3 hi; uint count;
+};
+
+// ---- Materials ----
+CONST uint kBsdfLambert = 0u;
+CONST uint kBsdfMirror = 1u;
+CONST uint kBsdfDielectric = 2u;
+CONST uint kBsdfNull = 3u;
+
+struct MaterialGpu {
+    vec3 albedo; uint type;
+    float ior; uint flags; float pad0; float pad1;
+};
+CONST uint kMaterialRefraction = 1u;  // flags: dielectric transmits
+
+// ---- Lights ----
+CONST uint kLightArea = 0u;    // an emissive Prim
+CONST uint kLightPoint = 1u;
+CONST uint kLightEnvironment = 2u;
+
+// Radiance: area light (per unit area, one-sided for triangles/disks, outward for spheres),
+// intensity for a point light, radiance for the environment.
+struct LightGpu {
+    vec3 position; uint type;  // point: position
+    vec3 radiance; uint prim;  // area: the primitive index
+    float pmf; float cdf; float pad0; float pad1;  // light selection probability, inclusive cdf
+};
+
+SHADER_NAMESPACE_END
+
+#ifdef __cplusplus
+static_assert(sizeof(telescope::shader::Prim) == 64);
+static_assert(sizeof(telescope::shader::BvhNode) == 32);
+static_assert(sizeof(telescope::shader::MaterialGpu) == 32);
+static_assert(sizeof(telescope::shader::LightGpu) == 48);
+#endif
+
+// ---- Path tracer pass (shaders/path_trace.comp) ----
+SHADER_NAMESPACE_BEGIN
+
+// Storage buffer bindings.
+CONST uint kBindingPrims = 0u;
+CONST uint kBindingBvh = 1u;
+CONST uint kBindingMaterials = 2u;
+CONST uint kBindingLights = 3u;
+CONST uint kPathTraceBindingCount = 4u;  // the accumulation buffer is reached by address
+
+// Specialisation constant ids: features a scene lacks are folded away by the compiler.
+CONST uint kSpecMaxBounces = 0u;
+CONST uint kSpecMinBounces = 1u;
+CONST uint kSpecDebiasMode = 2u;
+CONST uint kSpecPmfType = 3u;
+CONST uint kSpecPmfR = 4u;
+CONST uint kSpecPmfAlpha = 5u;
+CONST uint kSpecHasSpheres = 6u;
+CONST uint kSpecHasDisks = 7u;
+CONST uint kSpecHasSpecular = 8u;
+CONST uint kSpecLightCount = 9u;
+CONST uint kSpecLightSampling = 10u;
+CONST uint kSpecTwoSided = 11u;
+CONST uint kSpecFilter = 12u;
+CONST uint kSpecEnvironmentLight = 13u;  // light index, or 0xffffffff for none
+CONST uint kSpecMaxTraceDepth = 14u;
+CONST uint kSpecRayEpsilon = 15u;        // absolute ray offset, from the scene size
+
+CONST uint kFilterBox = 0u;
+CONST uint kFilterTent = 1u;
+CONST uint kFilterDirac = 2u;
+
+CONST uint kPathTraceGroupSize = 8u;  // 8x8 pixel tiles
+
+struct PathTracePush {
+    vec3 cameraPosition; float planeDistance;
+    vec3 cameraRight; uint width;
+    vec3 cameraUp; uint height;
+    vec3 cameraForward; uint seed;
+    uint sampleBase;    // global index of the first sample of this dispatch
+    uint sampleCount;   // samples per pixel in this dispatch
+    uint accumAddressLo; uint accumAddressHi;  // device address of the accumulation buffer
+};
+
+// Accumulation: per pixel and channel a compensated sum (hi, lo) of vec4.
+// index of the hi part = (channel * pixelCount + pixel) * 2, lo = hi + 1.
+CONST uint kChannelEstimate = 0u;    // rgb: sum of Z; w: non-finite samples dropped
+CONST uint kChannelEstimateSq = 1u;  // rgb: sum of Z^2
+CONST uint kChannelBase = 2u;        // rgb: sum of the base I(k)
+CONST uint kChannelCorrection = 3u;  // rgb: sum of the correction Z - I(k)
+CONST uint kChannelCount = 4u;
+
+SHADER_NAMESPACE_END
+#ifdef __cplusplus
+static_assert(sizeof(telescope::shader::PathTracePush) == 80);
+#endif
+
+#endif

@@ -1,0 +1,37 @@
+// Lets one header compile as GLSL and as C++ (pbrt-v4's PBRT_CPU_GPU habit).
+//
+// Shared headers write plain GLSL that C++ also accepts:
+//   FN          before every function (inline in C++),
+//   INOUT(T)    for inout parameters, OUT(T) for out parameters,
+//   uint, vec3, ... are glm types in C++.
+// C++ sees the shared code inside namespace telescope::shader.
+#ifndef TELESCOPE_LANG_H
+#define TELESCOPE_LANG_H
+
+#ifdef __cplusplus
+#include <cmath>
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <glm/gtc/constants.hpp>
+#define FN inline
+#define INOUT(T) T&
+#define OUT(T) T&
+#define CONST constexpr
+#define SHADER_NAMESPACE_BEGIN namespace telescope { namespace shader { using namespace glm; using uint = uint32_t;
+#define SHADER_NAMESPACE_END } }
+#else
+#define FN
+#define INOUT(T) inout T
+#define OUT(T) out T
+#define CONST const
+#define SHADER_NAMESPACE_BEGIN
+#define SHADER_NAMESPACE_END
+#endif
+
+SHADER_NAMESPACE_BEGIN
+CONST float kPi = 3.14159265358979323846f;
+CONST float kInvPi = 0.31830988618379067154f;
+CONST float kInfinity = 3.0e38f;
+SHADER_NAMESPACE_END
+
+#endif

@@ -1,0 +1,82 @@
+// Direction and area sampling, frames and MIS weights.
+#ifndef TELESCOPE_SAMPLING_H
+#define TELESCOPE_SAMPLING_H
+
+#include "shared/lang.h"
+
+SHADER_NAMESPACE_BEGIN
+
+// Orthonormal basis around a unit normal (Duff et al. 2017, branchless).
+FN void buildFrame(vec3 n, OUT(vec3) t, OUT(vec3) b) {
+    float s = n.z >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (s + n.z);
+    float c = n.x * n.y * a;
+    t = vec3(1.0f + s * n.x * n.x * a, s * c, -s * n.x);
+    b = vec3(c, s + n.y * n.y * a, -n.y);
+}
+
+// Cosine-weighted hemisphere around n; pdf = cos / pi.
+FN vec3 sampleCosineHemisphere(vec3 n, float u1, float u2) {
+    float r = sqrt(u1);
+    float phi = 2.0f * kPi * u2;
+    vec3 t, b;
+    buildFrame(n, t, b);
+    float z = sqrt(max(0.0f, 1.0f - u1));
+    return normalize(t * (r * cos(phi)) + b * (r * sin(phi)) + n * z);
+}
+
+// Uniform direction on the sphere; pdf = 1 / (4 pi).
+FN vec3 sampleUniformSphere(float u1, float u2) {
+    float z = 1.0f - 2.0f * u1;
+    float r = sqrt(max(0.0f, 1.0f - z * z));
+    float phi = 2.0f * kPi * u2;
+    return vec3(r * cos(phi), r * sin(phi), z);
+}
+
+// Uniform point on a triangle (barycentrics).
+FN vec3 sampleTriangle(vec3 p0, vec3 p1, vec3 p2, float u1, float u2) {
+    float su = sqrt(u1);
+    float b0 = 1.0f - su;
+    float b1 = u2 * su;
+    return p0 * b0 + p1 * b1 + p2 * (1.0f - b0 - b1);
+}
+
+// Uniform point on a disk of radius r around c with normal n.
+FN vec3 sampleDisk(vec3 c, vec3 n, float radius, float u1, float u2) {
+    vec3 t, b;
+    buildFrame(n, t, b);
+    float r = radius * sqrt(u1);
+    float phi = 2.0f * kPi * u2;
+    return c + t * (r * cos(phi)) + b * (r * sin(phi));
+}
+
+// Tent filter over [-1, 1] by inversion.
+FN float sampleTent(float u) {
+    return u < 0.5f ? sqrt(2.0f * u) - 1.0f : 1.0f - sqrt(2.0f - 2.0f * u);
+}
+
+FN float powerHeuristic(float a, float b) {
+    float a2 = a * a;
+    float b2 = b * b;
+    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
+
+FN float maxComponent(vec3 v) { return max(v.x, max(v.y, v.z)); }
+FN float luminance(vec3 c) { return dot(c, vec3(0.2126f, 0.7152f, 0.0722f)); }
+
+// Fresnel reflectance of a smooth dielectric; eta = n_transmitted / n_incident.
+FN float fresnelDielectric(float cosI, float eta, OUT(float) cosT) {
+    float sin2T = (1.0f - cosI * cosI) / (eta * eta);
+    if (sin2T >= 1.0f) {
+        cosT = 0.0f;
+        return 1.0f;
+    }
+    cosT = sqrt(max(0.0f, 1.0f - sin2T));
+    float rs = (cosI - eta * cosT) / (cosI + eta * cosT);
+    float rp = (eta * cosI - cosT) / (eta * cosI + cosT);
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+SHADER_NAMESPACE_END
+
+#endif

@@ -1,0 +1,178 @@
+#include "gpu/buffer.h"
+
+#include <cstring>
+#include <stdexcept>
+#include <utility>
+
+#include <fmt/format.h>
+
+#include "gpu/context.h"
+#include "gpu/vk_check.h"
+
+namespace telescope::gpu {
+
+Buffer::Buffer(const Context& context, VkDeviceSize size, std::string name)
+    : context_(&context), size_(size), name_(std::move(name)) {
+    if (size == 0) size = 16;  // Vulkan forbids empty buffers; keep size() truthful
+    VkDevice device = context.device();
+    try {
+        VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+        info.size = size;
+        info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
+                     VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
+        info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+        VK_CHECK(vkCreateBuffer(device, &info, nullptr, &buffer_));
+
+        VkMemoryRequirements req;
+        vkGetBufferMemoryRequirements(device, buffer_, &req);
+        const VkMemoryPropertyFlags hostVisible =
+            VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+        uint32_t type = context.findMemoryType(req.memoryTypeBits,
+                                               VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | hostVisible);
+        bool mappable = type != UINT32_MAX;
+        if (!mappable) type = context.findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+        if (type == UINT32_MAX) throw std::runtime_error("no device-local memory type for buffer " + name_);
+
+        VkMemoryAllocateFlagsInfo flags{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO};
+        flags.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
+        VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+        alloc.pNext = &flags;
+        alloc.allocationSize = req.size;
+        alloc.memoryTypeIndex = type;
+        VkResult r = vkAllocateMemory(device, &alloc, nullptr, &memory_);
+        if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY)
+            throw std::runtime_error(fmt::format("out of memory allocating buffer '{}' ({:.1f} MiB)", name_,
+                                                 double(size) / (1 << 20)));
+        VK_CHECK(r);
+        VK_CHECK(vkBindBufferMemory(device, buffer_, memory_, 0));
+        if (mappable) VK_CHECK(vkMapMemory(device, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
+
+        VkBufferDeviceAddressInfo addressInfo{VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO};
+        addressInfo.buffer = buffer_;
+        address_ = vkGetBufferDeviceAddress(device, &addressInfo);
+    } catch (...) {
+        release();
+        throw;
+    }
+}
+
+Buffer::~Buffer() { release(); }
+
+Buffer::Buffer(Buffer&& o) noexcept { *this = std::move(o); }
+
+Buffer& Buffer::operator=(Buffer&& o) noexcept {
+    if (this != &o) {
+        release();
+        context_ = std::exchange(o.context_, nullptr);
+        buffer_ = std::exchange(o.buffer_, VK_NULL_HANDLE);
+        memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
+        size_ = std::exchange(o.size_, 0);
+        address_ = std::exchange(o.address_, 0);
+        mapped_ = std::exchange(o.mapped_, nullptr);
+        name_ = std::move(o.name_);
+    }
+    return *this;
+}
+
+void Buffer::release() {
+    if (!context_) return;
+    VkDevice device = context_->device();
+    if (buffer_) vkDestroyBuffer(device, buffer_, nullptr);
+    if (memory_) vkFreeMemory(device, memory_, nullptr);  // also unmaps
+    buffer_ = VK_NULL_HANDLE;
+    memory_ = VK_NULL_HANDLE;
+    mapped_ = nullptr;
+}
+
+void Buffer::upload(const void* data, VkDeviceSize bytes, VkDeviceSize offset) {
+    if (offset + bytes > size_)
+        throw std::out_of_range(fmt::format("upload of {} bytes at {} overruns buffer '{}' ({} bytes)", bytes,
+                                            offset, name_, size_));
+    if (bytes == 0) return;
+    if (mapped_) std::memcpy(static_cast<char*>(mapped_) + offset, data, bytes);
+    else copyViaStaging(const_cast<void*>(data), bytes, offset, true);
+}
+
+void Buffer::download(void* data, VkDeviceSize bytes, VkDeviceSize offset) const {
+    if (offset + bytes > size_)
+        throw std::out_of_range(fmt::format("download of {} bytes at {} overruns buffer '{}' ({} bytes)", bytes,
+                                            offset, name_, size_));
+    if (bytes == 0) return;
+    if (mapped_) std::memcpy(data, static_cast<const char*>(mapped_) + offset, bytes);
+    else copyViaStaging(data, bytes, offset, false);
+}
+
+void Buffer::fill(uint32_t value) {
+    OneTimeCommands once(*context_);
+    vkCmdFillBuffer(once.cmd(), buffer_, 0, VK_WHOLE_SIZE, value);
+    once.submit();
+}
+
+void Buffer::copyViaStaging(void* host, VkDeviceSize bytes, VkDeviceSize offset, bool toDevice) const {
+    // Host-visible staging buffer for devices whose device-local memory cannot be mapped.
+    VkDevice device = context_->device();
+    VkBuffer staging = VK_NULL_HANDLE;
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    auto cleanup = [&] {
+        if (staging) vkDestroyBuffer(device, staging, nullptr);
+        if (memory) vkFreeMemory(device, memory, nullptr);
+    };
+    try {
+        VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+        info.size = bytes;
+        info.usage = VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+        VK_CHECK(vkCreateBuffer(device, &info, nullptr, &staging));
+        VkMemoryRequirements req;
+        vkGetBufferMemoryRequirements(device, staging, &req);
+        uint32_t type = context_->findMemoryType(
+            req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+        if (type == UINT32_MAX) throw std::runtime_error("no host-visible memory for staging");
+        VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+        alloc.allocationSize = req.size;
+        alloc.memoryTypeIndex = type;
+        VK_CHECK(vkAllocateMemory(device, &alloc, nullptr, &memory));
+        VK_CHECK(vkBindBufferMemory(device, staging, memory, 0));
+        void* p = nullptr;
+        VK_CHECK(vkMapMemory(device, memory, 0, VK_WHOLE_SIZE, 0, &p));
+        if (toDevice) std::memcpy(p, host, bytes);
+        OneTimeCommands once(*context_);
+        VkBufferCopy region{toDevice ? 0 : offset, toDevice ? offset : 0, bytes};
+        if (toDevice) vkCmdCopyBuffer(once.cmd(), staging, buffer_, 1, &region);
+        else vkCmdCopyBuffer(once.cmd(), buffer_, staging, 1, &region);
+        once.submit();
+        if (!toDevice) std::memcpy(host, p, bytes);
+    } catch (...) {
+        cleanup();
+        throw;
+    }
+    cleanup();
+}
+
+OneTimeCommands::OneTimeCommands(const Context& context) : context_(context) {
+    VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    alloc.commandPool = context.commandPool();
+    alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    alloc.commandBufferCount = 1;
+    VK_CHECK(vkAllocateCommandBuffers(context.device(), &alloc, &cmd_));
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    VkResult r = vkBeginCommandBuffer(cmd_, &begin);
+    if (r != VK_SUCCESS) {
+        vkFreeCommandBuffers(context.device(), context.commandPool(), 1, &cmd_);
+        VK_CHECK(r);
+    }
+}
+
+OneTimeCommands::~OneTimeCommands() {
+    if (cmd_) vkFreeCommandBuffers(context_.device(), context_.commandPool(), 1, &cmd_);
+}
+
+void OneTimeCommands::submit() {
+    if (submitted_) return;
+    VK_CHECK(vkEndCommandBuffer(cmd_));
+    // Make transfer writes visible to the host and to later submissions.
+    context_.submitAndWait(cmd_);
+    submitted_ = true;
+}
+
+}  // namespace telescope::gpu

@@ -1,0 +1,238 @@
+#include "gpu/pipeline.h"
+
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "gpu/buffer.h"
+#include "gpu/context.h"
+#include "gpu/vk_check.h"
+
+namespace telescope::gpu {
+
+uint32_t specFloat(float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    return u;
+}
+
+std::string shaderDirectory() {
+    if (const char* dir = std::getenv("TELESCOPE_SHADER_DIR"); dir && *dir) return dir;
+    return TELESCOPE_SHADER_DIR;
+}
+
+namespace {
+std::vector<uint32_t> readSpirv(const std::string& path) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) throw std::runtime_error(fmt::format("cannot open shader {} (is the build complete?)", path));
+    std::streamsize size = in.tellg();
+    if (size <= 0 || size % 4) throw std::runtime_error(fmt::format("{} is not SPIR-V", path));
+    std::vector<uint32_t> code(size_t(size) / 4);
+    in.seekg(0);
+    in.read(reinterpret_cast<char*>(code.data()), size);
+    return code;
+}
+}  // namespace
+
+// ---- ComputePipeline ----
+
+ComputePipeline::ComputePipeline(const Context& context, std::string shaderName, uint32_t bufferCount,
+                                 uint32_t pushConstantBytes, const std::vector<SpecConstant>& spec)
+    : context_(context), name_(std::move(shaderName)), bufferCount_(bufferCount), pushBytes_(pushConstantBytes) {
+    VkDevice device = context.device();
+    try {
+        auto code = readSpirv(shaderDirectory() + "/" + name_ + ".spv");
+        VkShaderModuleCreateInfo moduleInfo{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+        moduleInfo.codeSize = code.size() * 4;
+        moduleInfo.pCode = code.data();
+        VK_CHECK(vkCreateShaderModule(device, &moduleInfo, nullptr, &module_));
+
+        std::vector<VkDescriptorSetLayoutBinding> bindings(bufferCount);
+        for (uint32_t i = 0; i < bufferCount; ++i)
+            bindings[i] = {i, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+        VkDescriptorSetLayoutCreateInfo setInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+        setInfo.bindingCount = bufferCount;
+        setInfo.pBindings = bindings.data();
+        VK_CHECK(vkCreateDescriptorSetLayout(device, &setInfo, nullptr, &setLayout_));
+
+        VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, pushConstantBytes};
+        VkPipelineLayoutCreateInfo layoutInfo{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+        layoutInfo.setLayoutCount = 1;
+        layoutInfo.pSetLayouts = &setLayout_;
+        layoutInfo.pushConstantRangeCount = pushConstantBytes ? 1 : 0;
+        layoutInfo.pPushConstantRanges = &range;
+        VK_CHECK(vkCreatePipelineLayout(device, &layoutInfo, nullptr, &layout_));
+
+        std::vector<VkSpecializationMapEntry> entries;
+        std::vector<uint32_t> values;
+        for (const auto& s : spec) {
+            entries.push_back({s.id, uint32_t(values.size() * 4), 4});
+            values.push_back(s.value);
+        }
+        VkSpecializationInfo specInfo{uint32_t(entries.size()), entries.data(), values.size() * 4, values.data()};
+        VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+        info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+        info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+        info.stage.module = module_;
+        info.stage.pName = "main";
+        info.stage.pSpecializationInfo = entries.empty() ? nullptr : &specInfo;
+        info.layout = layout_;
+        VK_CHECK(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_));
+
+        if (bufferCount) {
+            VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, bufferCount};
+            VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+            poolInfo.maxSets = 1;
+            poolInfo.poolSizeCount = 1;
+            poolInfo.pPoolSizes = &size;
+            VK_CHECK(vkCreateDescriptorPool(device, &poolInfo, nullptr, &pool_));
+            VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+            alloc.descriptorPool = pool_;
+            alloc.descriptorSetCount = 1;
+            alloc.pSetLayouts = &setLayout_;
+            VK_CHECK(vkAllocateDescriptorSets(device, &alloc, &set_));
+        }
+    } catch (...) {
+        release();
+        throw;
+    }
+}
+
+ComputePipeline::~ComputePipeline() { release(); }
+
+void ComputePipeline::release() {
+    VkDevice device = context_.device();
+    if (pool_) vkDestroyDescriptorPool(device, pool_, nullptr);
+    if (pipeline_) vkDestroyPipeline(device, pipeline_, nullptr);
+    if (layout_) vkDestroyPipelineLayout(device, layout_, nullptr);
+    if (setLayout_) vkDestroyDescriptorSetLayout(device, setLayout_, nullptr);
+    if (module_) vkDestroyShaderModule(device, module_, nullptr);
+    pool_ = VK_NULL_HANDLE;
+    pipeline_ = VK_NULL_HANDLE;
+    layout_ = VK_NULL_HANDLE;
+    setLayout_ = VK_NULL_HANDLE;
+    module_ = VK_NULL_HANDLE;
+}
+
+void ComputePipeline::bindBuffers(const std::vector<const Buffer*>& buffers) {
+    if (buffers.size() != bufferCount_)
+        throw std::logic_error(fmt::format("pipeline {} takes {} buffers, got {}", name_, bufferCount_, buffers.size()));
+    const VkDeviceSize maxRange = context_.properties().limits.maxStorageBufferRange;
+    std::vector<VkDescriptorBufferInfo> infos(buffers.size());
+    std::vector<VkWriteDescriptorSet> writes(buffers.size());
+    for (size_t i = 0; i < buffers.size(); ++i) {
+        if (buffers[i]->size() > maxRange)
+            throw std::runtime_error(fmt::format(
+                "buffer '{}' ({} bytes) exceeds the storage-buffer binding limit ({} bytes); reach it by device address",
+                buffers[i]->name(), buffers[i]->size(), maxRange));
+        infos[i] = {buffers[i]->handle(), 0, VK_WHOLE_SIZE};
+        writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+        writes[i].dstSet = set_;
+        writes[i].dstBinding = uint32_t(i);
+        writes[i].descriptorCount = 1;
+        writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        writes[i].pBufferInfo = &infos[i];
+    }
+    vkUpdateDescriptorSets(context_.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
+}
+
+// ---- CommandBatch ----
+
+CommandBatch::CommandBatch(const Context& context, uint32_t maxDispatches)
+    : context_(context), maxDispatches_(maxDispatches) {
+    VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    alloc.commandPool = context.commandPool();
+    alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    alloc.commandBufferCount = 1;
+    VK_CHECK(vkAllocateCommandBuffers(context.device(), &alloc, &cmd_));
+    if (context.timestampsSupported()) {
+        VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+        info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+        info.queryCount = maxDispatches + 1;
+        VkResult r = vkCreateQueryPool(context.device(), &info, nullptr, &queries_);
+        if (r != VK_SUCCESS) {
+            vkFreeCommandBuffers(context.device(), context.commandPool(), 1, &cmd_);
+            VK_CHECK(r);
+        }
+    }
+}
+
+CommandBatch::~CommandBatch() {
+    if (queries_) vkDestroyQueryPool(context_.device(), queries_, nullptr);
+    if (cmd_) vkFreeCommandBuffers(context_.device(), context_.commandPool(), 1, &cmd_);
+}
+
+void CommandBatch::begin() {
+    VK_CHECK(vkResetCommandBuffer(cmd_, 0));
+    VkCommandBufferBeginInfo info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    info.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    VK_CHECK(vkBeginCommandBuffer(cmd_, &info));
+    if (queries_) {
+        vkCmdResetQueryPool(cmd_, queries_, 0, maxDispatches_ + 1);
+        vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, queries_, 0);
+    }
+    count_ = 0;
+    names_.clear();
+    recording_ = true;
+}
+
+void CommandBatch::dispatch(const ComputePipeline& pipeline, const void* push, uint32_t pushBytes,
+                            uint32_t groupsX, uint32_t groupsY, uint32_t groupsZ, const char* name) {
+    if (!recording_) throw std::logic_error("CommandBatch::dispatch outside begin()/submitAndWait()");
+    if (count_ >= maxDispatches_)
+        throw std::logic_error(fmt::format("CommandBatch holds at most {} dispatches", maxDispatches_));
+    if (pushBytes != pipeline.pushConstantBytes())
+        throw std::logic_error(fmt::format("pipeline {}: {} push-constant bytes, expected {}", pipeline.name(),
+                                           pushBytes, pipeline.pushConstantBytes()));
+    const auto& limits = context_.properties().limits;
+    if (groupsX > limits.maxComputeWorkGroupCount[0] || groupsY > limits.maxComputeWorkGroupCount[1] ||
+        groupsZ > limits.maxComputeWorkGroupCount[2])
+        throw std::runtime_error(fmt::format("dispatch {} of {}x{}x{} workgroups exceeds the device limit",
+                                             pipeline.name(), groupsX, groupsY, groupsZ));
+    {
+        // Each pass sees the writes of every pass before it, in this batch or an earlier one.
+        VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+        barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+        barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+        vkCmdPipelineBarrier(cmd_, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1,
+                             &barrier, 0, nullptr, 0, nullptr);
+    }
+    vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
+    VkDescriptorSet set = pipeline.descriptorSet();
+    if (set)
+        vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.layout(), 0, 1, &set, 0, nullptr);
+    if (pushBytes) vkCmdPushConstants(cmd_, pipeline.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, pushBytes, push);
+    vkCmdDispatch(cmd_, groupsX, groupsY, groupsZ);
+    ++count_;
+    if (queries_) vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, queries_, count_);
+    names_.push_back(name ? name : pipeline.name());
+}
+
+std::vector<DispatchTiming> CommandBatch::submitAndWait() {
+    if (!recording_) throw std::logic_error("CommandBatch::submitAndWait without begin()");
+    recording_ = false;
+    // Results are read by the host after the batch: make shader writes visible to it.
+    VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+    barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    vkCmdPipelineBarrier(cmd_, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0,
+                         nullptr, 0, nullptr);
+    VK_CHECK(vkEndCommandBuffer(cmd_));
+    context_.submitAndWait(cmd_);
+
+    std::vector<DispatchTiming> out(count_);
+    for (uint32_t i = 0; i < count_; ++i) out[i].name = names_[i];
+    if (queries_ && count_) {
+        std::vector<uint64_t> stamps(count_ + 1);
+        VK_CHECK(vkGetQueryPoolResults(context_.device(), queries_, 0, count_ + 1, stamps.size() * 8, stamps.data(), 8,
+                                       VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+        for (uint32_t i = 0; i < count_; ++i)
+            out[i].gpuMs = double(stamps[i + 1] - stamps[i]) * context_.timestampPeriodNs() * 1e-6;
+    }
+    return out;
+}
+
+}  // namespace telescope::gpu

@@ -1,0 +1,93 @@
+// Compute pipelines and the command batches that run them.
+//
+// A ComputePipeline is one .comp shader (compiled to SPIR-V at build time) with its
+// specialisation constants folded in, a descriptor set of storage buffers (binding i = buffer i)
+// and a push-constant block. A CommandBatch records named dispatches with a barrier between
+// consecutive ones and a timestamp after each, so every pass is timed by the name the host gave
+// it.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+
+namespace telescope::gpu {
+
+class Context;
+class Buffer;
+
+struct SpecConstant {
+    uint32_t id;
+    uint32_t value;  // bools as 0/1; floats by bit pattern (see specFloat)
+};
+uint32_t specFloat(float f);
+
+// Directory holding the compiled .spv files: $TELESCOPE_SHADER_DIR, else the build tree's.
+std::string shaderDirectory();
+
+class ComputePipeline {
+public:
+    ComputePipeline(const Context& context, std::string shaderName, uint32_t bufferCount,
+                    uint32_t pushConstantBytes, const std::vector<SpecConstant>& spec = {});
+    ~ComputePipeline();
+    ComputePipeline(const ComputePipeline&) = delete;
+    ComputePipeline& operator=(const ComputePipeline&) = delete;
+
+    // Points binding i at buffers[i] (whole buffer; each must fit maxStorageBufferRange).
+    void bindBuffers(const std::vector<const Buffer*>& buffers);
+
+    const std::string& name() const { return name_; }
+    VkPipeline handle() const { return pipeline_; }
+    VkPipelineLayout layout() const { return layout_; }
+    VkDescriptorSet descriptorSet() const { return set_; }
+    uint32_t pushConstantBytes() const { return pushBytes_; }
+
+private:
+    void release();
+
+    const Context& context_;
+    std::string name_;
+    uint32_t bufferCount_ = 0, pushBytes_ = 0;
+    VkShaderModule module_ = VK_NULL_HANDLE;
+    VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
+    VkPipelineLayout layout_ = VK_NULL_HANDLE;
+    VkPipeline pipeline_ = VK_NULL_HANDLE;
+    VkDescriptorPool pool_ = VK_NULL_HANDLE;
+    VkDescriptorSet set_ = VK_NULL_HANDLE;
+};
+
+struct DispatchTiming {
+    std::string name;
+    double gpuMs = 0.0;  // from timestamps; 0 when the device has none
+};
+
+class CommandBatch {
+public:
+    // maxDispatches bounds the dispatches recorded between begin() and submit().
+    CommandBatch(const Context& context, uint32_t maxDispatches);
+    ~CommandBatch();
+    CommandBatch(const CommandBatch&) = delete;
+    CommandBatch& operator=(const CommandBatch&) = delete;
+
+    void begin();
+    // Records a dispatch of groups.x * groups.y * groups.z workgroups, named for timing.
+    void dispatch(const ComputePipeline& pipeline, const void* push, uint32_t pushBytes, uint32_t groupsX,
+                  uint32_t groupsY = 1, uint32_t groupsZ = 1, const char* name = nullptr);
+    // Submits, waits, and returns the timings of this batch's dispatches in order.
+    std::vector<DispatchTiming> submitAndWait();
+    uint32_t recorded() const { return count_; }
+    uint32_t capacity() const { return maxDispatches_; }
+
+private:
+    const Context& context_;
+    uint32_t maxDispatches_;
+    VkCommandBuffer cmd_ = VK_NULL_HANDLE;
+    VkQueryPool queries_ = VK_NULL_HANDLE;
+    uint32_t count_ = 0;
+    bool recording_ = false;
+    std::vector<std::string> names_;
+};
+
+}  // namespace telescope::gpu

@@ -1,0 +1,48 @@
+// Per-pixel sums on the host, in double precision: the estimate, its square, the base and the
+// correction of every pixel, and the sample count. A Film is the exact state of a render: means,
+// variances and output images derive from it, and two films of one scene with different seeds
+// merge by adding sums.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "shared/gpu_types.h"
+
+namespace telescope {
+
+class Film {
+public:
+    Film() = default;
+    Film(uint32_t width, uint32_t height);
+
+    uint32_t width() const { return width_; }
+    uint32_t height() const { return height_; }
+    size_t pixelCount() const { return size_t(width_) * height_; }
+    uint64_t samplesPerPixel() const { return spp_; }
+    void setSamplesPerPixel(uint64_t spp) { spp_ = spp; }
+
+    // Raw sums of a channel (shader::kChannel*); w of the estimate channel counts dropped
+    // non-finite samples.
+    std::vector<glm::dvec4>& sums(uint32_t channel) { return sums_[channel]; }
+    const std::vector<glm::dvec4>& sums(uint32_t channel) const { return sums_[channel]; }
+
+    glm::dvec3 mean(uint32_t channel, size_t pixel) const;
+    // Sample variance of the pixel estimate divided by the sample count: the variance of the mean.
+    glm::dvec3 varianceOfMean(size_t pixel) const;
+    uint64_t nonFiniteSamples() const;
+
+    // Adds another film's samples (same size).
+    void merge(const Film& other);
+
+private:
+    uint32_t width_ = 0, height_ = 0;
+    uint64_t spp_ = 0;
+    std::array<std::vector<glm::dvec4>, shader::kChannelCount> sums_;
+};
+
+}  // namespace telescope

@@ -1,0 +1,143 @@
+#include "render/gpu_scene.h"
+
+#include <cmath>
+
+#include <glm/gtc/constants.hpp>
+
+namespace telescope {
+
+namespace {
+
+float luminanceOf(const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+
+Aabb boundsOf(const Geometry& g) {
+    Aabb b;
+    switch (g.type) {
+        case GeometryType::Triangle:
+            b.extend(g.p0);
+            b.extend(g.p1);
+            b.extend(g.p2);
+            break;
+        case GeometryType::Sphere:
+            b.extend(g.p0 - glm::vec3(g.radius));
+            b.extend(g.p0 + glm::vec3(g.radius));
+            break;
+        case GeometryType::Disk: {
+            // Extent of a disk along axis i: r * sqrt(1 - n_i^2).
+            glm::vec3 e = g.radius * glm::sqrt(glm::max(glm::vec3(0.0f), 1.0f - g.normal * g.normal));
+            b.extend(g.p0 - e);
+            b.extend(g.p0 + e);
+            break;
+        }
+    }
+    return b;
+}
+
+float areaOf(const Geometry& g) {
+    switch (g.type) {
+        case GeometryType::Triangle: return 0.5f * glm::length(glm::cross(g.p1 - g.p0, g.p2 - g.p0));
+        case GeometryType::Sphere: return 4.0f * glm::pi<float>() * g.radius * g.radius;
+        case GeometryType::Disk: return glm::pi<float>() * g.radius * g.radius;
+    }
+    return 0.0f;
+}
+
+}  // namespace
+
+GpuScene buildGpuScene(const Scene& scene) {
+    GpuScene out;
+    SceneFeatures& f = out.features;
+
+    // ---- Materials ----
+    for (const Material& m : scene.materials) {
+        shader::MaterialGpu g{};
+        g.albedo = m.albedo;
+        g.type = uint32_t(m.type);
+        g.ior = m.ior;
+        g.flags = m.enableRefraction ? shader::kMaterialRefraction : 0u;
+        out.materials.push_back(g);
+        if (m.type == BsdfType::Mirror || m.type == BsdfType::Dielectric) f.specular = true;
+    }
+    if (out.materials.empty()) out.materials.push_back({});  // keep the buffer non-empty
+
+    // ---- BVH over the geometry; prims are stored in leaf order ----
+    std::vector<Aabb> boxes;
+    boxes.reserve(scene.geometry.size());
+    Aabb all;
+    for (const Geometry& g : scene.geometry) {
+        boxes.push_back(boundsOf(g));
+        all.extend(boxes.back());
+    }
+    f.sceneExtent = scene.geometry.empty() ? 1.0f : glm::length(all.hi - all.lo);
+    if (!(f.sceneExtent > 0.0f) || !std::isfinite(f.sceneExtent)) f.sceneExtent = 1.0f;
+    Bvh bvh = buildBvh(boxes);
+    for (const BvhNodeHost& n : bvh.nodes) out.nodes.push_back({n.lo, n.first, n.hi, n.count});
+
+    // ---- Prims and area lights ----
+    std::vector<float> power;
+    out.prims.reserve(bvh.order.size());
+    for (uint32_t slot = 0; slot < bvh.order.size(); ++slot) {
+        const Geometry& g = scene.geometry[bvh.order[slot]];
+        shader::Prim p{};
+        p.type = uint32_t(g.type);
+        p.material = g.material;
+        p.p0 = g.p0;
+        p.p1 = g.type == GeometryType::Triangle ? g.p1 : glm::vec3(g.radius, 0.0f, 0.0f);
+        p.p2 = g.type == GeometryType::Triangle ? g.p2 : glm::vec3(0.0f);
+        p.n = g.normal;
+        p.area = areaOf(g);
+        p.light = -1;
+        if (g.type == GeometryType::Sphere) f.spheres = true;
+        if (g.type == GeometryType::Disk) f.disks = true;
+        float lum = luminanceOf(g.emission);
+        if (lum > 0.0f && p.area > 0.0f) {
+            p.light = int32_t(out.lights.size());
+            shader::LightGpu l{};
+            l.type = shader::kLightArea;
+            l.radiance = g.emission;
+            l.prim = slot;
+            out.lights.push_back(l);
+            power.push_back(lum * glm::pi<float>() * p.area);
+            f.areaLights = true;
+        }
+        out.prims.push_back(p);
+    }
+
+    // ---- Point lights and the environment ----
+    for (const PointLikeLight& pl : scene.lights) {
+        float lum = luminanceOf(pl.intensity);
+        if (!(lum > 0.0f)) continue;
+        shader::LightGpu l{};
+        l.radiance = pl.intensity;
+        if (pl.type == LightType::Point) {
+            l.type = shader::kLightPoint;
+            l.position = pl.position;
+            power.push_back(4.0f * glm::pi<float>() * lum);
+            f.pointLights = true;
+        } else {
+            if (f.environment) continue;  // one environment; the loader rejects more
+            l.type = shader::kLightEnvironment;
+            float r = 0.5f * f.sceneExtent;
+            power.push_back(lum * glm::pi<float>() * 4.0f * glm::pi<float>() * r * r);
+            f.environment = true;
+            f.environmentLight = uint32_t(out.lights.size());
+        }
+        out.lights.push_back(l);
+    }
+
+    // ---- Light selection pmf and inclusive cdf ----
+    double total = 0.0;
+    for (float p : power) total += p;
+    double running = 0.0;
+    for (size_t i = 0; i < out.lights.size(); ++i) {
+        out.lights[i].pmf = float(power[i] / total);
+        running += power[i];
+        out.lights[i].cdf = i + 1 == out.lights.size() ? 1.0f : float(running / total);
+    }
+    f.lightCount = uint32_t(out.lights.size());
+    if (out.lights.empty()) out.lights.push_back({});
+    if (out.prims.empty()) out.prims.push_back({});
+    return out;
+}
+
+}  // namespace telescope

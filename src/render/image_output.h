@@ -1,0 +1,30 @@
+// Writes a Film as a float EXR (estimate, base, correction and variance channels, with the
+// render's settings in the metadata) and a tone-mapped PNG preview. Files are written to a
+// temporary name and renamed, so a failed write leaves no half-written output.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "render/film.h"
+
+namespace telescope {
+
+struct ImageMetadata {
+    std::vector<std::pair<std::string, std::string>> entries;  // "telescope:key" -> value
+};
+
+void writeExr(const std::string& path, const Film& film, const ImageMetadata& metadata);
+// sRGB preview of the estimate; negative and >1 values are clipped for display only.
+void writePngPreview(const std::string& path, const Film& film);
+
+// Reads back the RGB estimate of an EXR written by writeExr (tests and tools).
+struct RgbImage {
+    int width = 0, height = 0;
+    std::vector<float> pixels;  // rgb, row-major
+    std::vector<std::string> channelNames;
+};
+RgbImage readExrChannels(const std::string& path, const std::vector<std::string>& channels);
+
+}  // namespace telescope

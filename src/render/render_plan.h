@@ -1,0 +1,49 @@
+// What a render of a scene runs, and why: the start of "simulate only what the scene calls for".
+//
+// The plan names every pass the host will dispatch and the passes it will not, with the reason
+// for each, and the specialisation constants that fold the scene's absent features (spheres,
+// disks, specular materials, kinds of light, debiasing) out of the compiled pipelines.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "gpu/pipeline.h"
+#include "render/gpu_scene.h"
+#include "scene/scene.h"
+
+namespace telescope {
+
+struct PlannedPass {
+    std::string name;    // dispatch name, used for timing and stats
+    std::string shader;  // .comp file (without extension)
+    std::string why;
+};
+
+struct SkippedPass {
+    std::string name;
+    std::string why;
+};
+
+struct FeatureSwitch {
+    std::string name;
+    bool on = false;
+    std::string why;
+};
+
+struct RenderPlan {
+    std::vector<PlannedPass> passes;     // in dispatch order, per batch of samples
+    std::vector<SkippedPass> skipped;
+    std::vector<FeatureSwitch> features;
+    std::vector<gpu::SpecConstant> pathTraceSpec;
+    std::string estimator;               // one line describing the estimator
+};
+
+RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& features);
+
+// Human-readable plan, as `telescope plan` prints it.
+std::string describePlan(const Scene& scene, const RenderPlan& plan);
+
+std::string pmfDescription(const PmfSettings& pmf);
+
+}  // namespace telescope

@@ -1,0 +1,145 @@
+#include "render/renderer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <glm/gtc/constants.hpp>
+
+namespace telescope {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+constexpr uint32_t kMaxDispatchesPerBatch = 64;
+}  // namespace
+
+Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
+    : context_(context), scene_(scene), seed_(seed) {
+    auto start = Clock::now();
+    gpuScene_ = buildGpuScene(scene);
+    plan_ = makeRenderPlan(scene, gpuScene_.features);
+
+    // ---- Scene buffers ----
+    auto makeBuffer = [&](const auto& v, const char* name) {
+        gpu::Buffer b(context, v.size() * sizeof(v[0]), name);
+        b.upload(v);
+        return b;
+    };
+    prims_ = makeBuffer(gpuScene_.prims, "prims");
+    nodes_ = makeBuffer(gpuScene_.nodes, "bvh nodes");
+    materials_ = makeBuffer(gpuScene_.materials, "materials");
+    lights_ = makeBuffer(gpuScene_.lights, "lights");
+
+    // ---- Accumulation: (hi, lo) vec4 pairs per channel and pixel ----
+    const uint64_t pixels = uint64_t(scene.camera.width) * scene.camera.height;
+    const uint64_t accumBytes = pixels * shader::kChannelCount * 2 * sizeof(glm::vec4);
+    if (pixels * shader::kChannelCount * 2 >= (uint64_t(1) << 32))
+        throw std::runtime_error(fmt::format("{}x{} pixels is too many for one render", scene.camera.width,
+                                             scene.camera.height));
+    accum_ = gpu::Buffer(context, accumBytes, "accumulation");
+    accum_.fill(0);
+
+    pathTrace_ = std::make_unique<gpu::ComputePipeline>(context, "path_trace", shader::kPathTraceBindingCount,
+                                                        uint32_t(sizeof(shader::PathTracePush)), plan_.pathTraceSpec);
+    pathTrace_->bindBuffers({&prims_, &nodes_, &materials_, &lights_});
+    batch_ = std::make_unique<gpu::CommandBatch>(context, kMaxDispatchesPerBatch);
+    stats_.setupSeconds = secondsSince(start);
+}
+
+Renderer::~Renderer() = default;
+
+uint32_t Renderer::samplesPerDispatch() const {
+    // About a million paths per dispatch, at most 16 samples per pixel in one thread.
+    uint64_t pixels = uint64_t(scene_.camera.width) * scene_.camera.height;
+    return uint32_t(std::clamp<uint64_t>((1u << 20) / std::max<uint64_t>(pixels, 1), 1, 16));
+}
+
+void Renderer::render(const RenderRequest& request) {
+    const Camera& cam = scene_.camera;
+    shader::PathTracePush push{};
+    push.cameraPosition = cam.position;
+    push.cameraRight = cam.right;
+    push.cameraUp = cam.up;
+    push.cameraForward = cam.forward;
+    push.planeDistance = 1.0f / std::tan(0.5f * glm::radians(cam.fovDegrees));
+    push.width = cam.width;
+    push.height = cam.height;
+    push.seed = seed_;
+    push.accumAddressLo = uint32_t(accum_.address());
+    push.accumAddressHi = uint32_t(accum_.address() >> 32);
+    const uint32_t groupsX = (cam.width + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
+    const uint32_t groupsY = (cam.height + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
+    const uint32_t perDispatch = samplesPerDispatch();
+    const double pixels = double(cam.width) * cam.height;
+
+    const bool timed = request.timeLimit > 0.0;
+    const auto start = Clock::now();
+    uint64_t done = 0;
+    uint32_t dispatchesPerBatch = 1;  // grows until a batch takes about a quarter second
+    while (true) {
+        double elapsed = secondsSince(start);
+        if (timed ? elapsed >= request.timeLimit : done >= request.spp) break;
+
+        // ---- One batch: several dispatches, one submit ----
+        batch_->begin();
+        uint64_t batchSamples = 0;
+        for (uint32_t d = 0; d < dispatchesPerBatch; ++d) {
+            uint64_t remaining = timed ? perDispatch : request.spp - done - batchSamples;
+            if (remaining == 0) break;
+            push.sampleBase = uint32_t(sampleIndex_ + batchSamples);
+            push.sampleCount = uint32_t(std::min<uint64_t>(perDispatch, remaining));
+            batch_->dispatch(*pathTrace_, &push, sizeof(push), groupsX, groupsY, 1, "path_trace");
+            batchSamples += push.sampleCount;
+        }
+        auto batchStart = Clock::now();
+        auto timings = batch_->submitAndWait();
+        double batchSeconds = secondsSince(batchStart);
+        ++stats_.submits;
+        for (const auto& t : timings) {
+            stats_.passes[t.name].dispatches++;
+            stats_.passes[t.name].gpuMs += t.gpuMs;
+        }
+        done += batchSamples;
+        sampleIndex_ += batchSamples;
+
+        if (batchSeconds < 0.1 && dispatchesPerBatch < kMaxDispatchesPerBatch) dispatchesPerBatch *= 2;
+        if (timed) {
+            // Do not overshoot the time limit by more than about one batch.
+            double left = request.timeLimit - secondsSince(start);
+            double perDispatchSeconds = batchSeconds / std::max<size_t>(timings.size(), 1);
+            if (left > 0.0 && perDispatchSeconds > 0.0)
+                dispatchesPerBatch = std::clamp<uint32_t>(uint32_t(left / perDispatchSeconds), 1, dispatchesPerBatch);
+        }
+        if (request.progress) {
+            RenderProgress p;
+            p.samplesDone = done;
+            p.samplesTarget = timed ? 0 : request.spp;
+            p.seconds = secondsSince(start);
+            p.timeLimit = request.timeLimit;
+            p.pathsPerSecond = p.seconds > 0.0 ? double(done) * pixels / p.seconds : 0.0;
+            request.progress(p);
+        }
+    }
+    stats_.wallSeconds += secondsSince(start);
+    stats_.samplesPerPixel = sampleIndex_;
+}
+
+Film Renderer::film() const {
+    const Camera& cam = scene_.camera;
+    Film film(cam.width, cam.height);
+    film.setSamplesPerPixel(sampleIndex_);
+    std::vector<glm::vec4> raw(film.pixelCount() * shader::kChannelCount * 2);
+    accum_.download(raw.data(), raw.size() * sizeof(glm::vec4));
+    for (uint32_t c = 0; c < shader::kChannelCount; ++c) {
+        auto& sums = film.sums(c);
+        for (size_t i = 0; i < film.pixelCount(); ++i) {
+            size_t k = (c * film.pixelCount() + i) * 2;
+            sums[i] = glm::dvec4(raw[k]) + glm::dvec4(raw[k + 1]);
+        }
+    }
+    return film;
+}
+
+}  // namespace telescope

@@ -1,0 +1,79 @@
+// Schedules the passes of a plan on the device and accumulates samples into a Film.
+//
+// A Renderer owns the scene buffers, the accumulation buffer and the pipelines. render() may be
+// called repeatedly: samples continue from where the last call stopped (their random numbers
+// depend only on pixel, global sample index and seed), so a render can be extended, and renders
+// with different seeds can be merged.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "gpu/buffer.h"
+#include "gpu/context.h"
+#include "gpu/pipeline.h"
+#include "render/film.h"
+#include "render/gpu_scene.h"
+#include "render/render_plan.h"
+#include "scene/scene.h"
+
+namespace telescope {
+
+struct RenderProgress {
+    uint64_t samplesDone = 0;     // per pixel, this call
+    uint64_t samplesTarget = 0;   // per pixel, 0 when time-limited
+    double seconds = 0.0;
+    double timeLimit = 0.0;
+    double pathsPerSecond = 0.0;
+};
+
+struct RenderRequest {
+    uint64_t spp = 0;          // samples per pixel to add (used when timeLimit is 0)
+    double timeLimit = 0.0;    // seconds; renders whole dispatches until it is reached
+    std::function<void(const RenderProgress&)> progress;  // called after every batch
+};
+
+struct PassStats {
+    uint64_t dispatches = 0;
+    double gpuMs = 0.0;
+};
+
+struct RenderStats {
+    double wallSeconds = 0.0;
+    double setupSeconds = 0.0;  // scene upload and pipeline creation
+    uint64_t samplesPerPixel = 0;
+    uint64_t submits = 0;
+    std::map<std::string, PassStats> passes;
+};
+
+class Renderer {
+public:
+    Renderer(gpu::Context& context, const Scene& scene, uint32_t seed);
+    ~Renderer();
+
+    const RenderPlan& plan() const { return plan_; }
+    void render(const RenderRequest& request);
+    Film film() const;  // downloads the accumulation
+    const RenderStats& stats() const { return stats_; }
+    uint32_t seed() const { return seed_; }
+
+private:
+    uint32_t samplesPerDispatch() const;
+
+    gpu::Context& context_;
+    const Scene& scene_;
+    uint32_t seed_;
+    GpuScene gpuScene_;
+    RenderPlan plan_;
+    gpu::Buffer prims_, nodes_, materials_, lights_, accum_;
+    std::unique_ptr<gpu::ComputePipeline> pathTrace_;
+    std::unique_ptr<gpu::CommandBatch> batch_;
+    uint64_t sampleIndex_ = 0;  // next global sample index
+    RenderStats stats_;
+};
+
+}  // namespace telescope

@@ -1,0 +1,27 @@
+// Helpers for tests that render on the Vulkan device: one shared Context (validation on when
+// TELESCOPE_VALIDATION=1, as CTest sets it), scene loading from the source tree, and renders to a
+// Film with a given seed.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "gpu/context.h"
+#include "render/film.h"
+#include "render/renderer.h"
+#include "scene/scene_loader.h"
+
+namespace telescope::test {
+
+gpu::Context& sharedContext();
+std::string sourcePath(const std::string& relative);
+Scene loadTestScene(const std::string& relative, const std::vector<SceneOverride>& overrides = {});
+Film renderFilm(const Scene& scene, uint64_t spp, uint32_t seed);
+
+// Fails the current test if the validation layer reported anything.
+void expectNoValidationMessages();
+
+}  // namespace telescope::test

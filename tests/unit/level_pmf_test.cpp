@@ -1,0 +1,109 @@
+// The level pmf (shaders/shared/level_pmf.h), run on the CPU exactly as the shaders run it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "shared/level_pmf.h"
+#include "shared/rng.h"
+
+using namespace telescope::shader;
+
+namespace {
+
+LevelPmf geometric(float r) { return LevelPmf{kPmfGeometric, r, 0.0f}; }
+LevelPmf powerLaw(float alpha) { return LevelPmf{kPmfPowerLaw, 0.0f, alpha}; }
+
+// Upper quantile of chi-square with k degrees of freedom (Wilson-Hilferty), z = normal quantile.
+double chiSquareQuantile(double k, double z) {
+    double h = 2.0 / (9.0 * k);
+    return k * std::pow(1.0 - h + z * std::sqrt(h), 3.0);
+}
+
+// Chi-square statistic of `samples` draws of `sampler` against `pmf`; bins 0..B-1 plus a tail.
+double chiSquare(const LevelPmf& sampler, const LevelPmf& pmf, int samples, int bins, uint32_t seed) {
+    std::vector<double> counts(bins + 1, 0.0);
+    Rng rng = rngCreate(7, 11, seed);
+    for (int i = 0; i < samples; ++i) {
+        uint m = levelSample(sampler, rngNext(rng));
+        counts[std::min<uint>(m, uint(bins))] += 1.0;
+    }
+    double chi2 = 0.0;
+    for (int b = 0; b <= bins; ++b) {
+        double p = b < bins ? levelProbability(pmf, uint(b)) : levelTail(pmf, uint(bins));
+        double expected = p * samples;
+        chi2 += (counts[b] - expected) * (counts[b] - expected) / expected;
+    }
+    return chi2;
+}
+
+}  // namespace
+
+TEST(LevelPmf, GeometricIsNormalisedAndMatchesItsTail) {
+    for (float r : {0.2f, 0.5f, 0.65f, 0.9f}) {
+        LevelPmf pmf = geometric(r);
+        double sum = 0.0;
+        for (uint m = 0; m < 400; ++m) {
+            sum += levelProbability(pmf, m);
+            EXPECT_NEAR(levelProbability(pmf, m), levelTail(pmf, m) - levelTail(pmf, m + 1), 1e-6 * levelTail(pmf, m));
+        }
+        EXPECT_NEAR(sum, 1.0, 1e-5) << "r = " << r;
+    }
+}
+
+TEST(LevelPmf, PowerLawIsNormalisedAndStableFarOut) {
+    for (float alpha : {0.3f, 2.0f / 3.0f, 0.9f}) {
+        LevelPmf pmf = powerLaw(alpha);
+        double sum = 0.0;
+        const uint M = 100000;
+        for (uint m = 0; m < M; ++m) sum += levelProbability(pmf, m);
+        EXPECT_NEAR(sum + levelTail(pmf, M), 1.0, 1e-4) << "alpha = " << alpha;
+        // Far levels: p(m) positive and finite, relative agreement with the derivative of the tail.
+        for (uint m : {1000u, 100000u, 10000000u, 2000000000u}) {
+            double p = levelProbability(pmf, m);
+            double analytic = (1.0 - alpha) * std::pow(double(m) + 1.5, double(alpha) - 2.0);
+            EXPECT_TRUE(std::isfinite(1.0 / p)) << m;
+            EXPECT_NEAR(p / analytic, 1.0, 2e-3) << "alpha = " << alpha << " m = " << m;
+        }
+    }
+}
+
+TEST(LevelPmf, SamplerPassesChiSquare) {
+    const int samples = 200000, bins = 12;
+    const double critical = chiSquareQuantile(bins, 3.09);  // 0.1% level
+    EXPECT_LT(chiSquare(geometric(0.65f), geometric(0.65f), samples, bins, 1), critical);
+    EXPECT_LT(chiSquare(geometric(0.3f), geometric(0.3f), samples, bins, 2), critical);
+    EXPECT_LT(chiSquare(powerLaw(2.0f / 3.0f), powerLaw(2.0f / 3.0f), samples, bins, 3), critical);
+    EXPECT_LT(chiSquare(powerLaw(0.4f), powerLaw(0.4f), samples, bins, 4), critical);
+}
+
+TEST(LevelPmf, ChiSquareDetectsAWrongSampler) {
+    // The same test must fail for a sampler that is slightly off.
+    const int samples = 200000, bins = 12;
+    const double critical = chiSquareQuantile(bins, 3.09);
+    EXPECT_GT(chiSquare(geometric(0.62f), geometric(0.65f), samples, bins, 5), critical);
+    EXPECT_GT(chiSquare(powerLaw(0.62f), powerLaw(2.0f / 3.0f), samples, bins, 6), critical);
+}
+
+TEST(LevelPmf, SamplesStayFiniteAtTheEdgeOfTheUnitInterval) {
+    const float largest = 1.0f - 1.0f / 16777216.0f;  // the largest value rngNext returns
+    EXPECT_LT(levelSample(geometric(0.65f), largest), 30u);
+    uint m = levelSample(powerLaw(2.0f / 3.0f), largest);
+    EXPECT_EQ(m, kMaxLevel);
+    EXPECT_TRUE(std::isfinite(1.0f / levelProbability(powerLaw(2.0f / 3.0f), m)));
+    EXPECT_EQ(levelSample(geometric(0.65f), 0.0f), 0u);
+    EXPECT_EQ(levelSample(powerLaw(2.0f / 3.0f), 0.0f), 0u);
+}
+
+TEST(Rng, NeverReturnsOneAndStreamsDiffer) {
+    Rng a = rngCreate(0, 0, 1), b = rngCreate(0, 1, 1), c = rngCreate(1, 0, 1);
+    int same = 0;
+    for (int i = 0; i < 100000; ++i) {
+        float x = rngNext(a), y = rngNext(b), z = rngNext(c);
+        ASSERT_LT(x, 1.0f);
+        ASSERT_GE(x, 0.0f);
+        same += (x == y) + (x == z);
+    }
+    EXPECT_LT(same, 20);
+}
