@@ -2,8 +2,12 @@
 // for several k. Run through bench/run, which writes docs/BENCHMARKS.md.
 #include <benchmark/benchmark.h>
 
+#include <fstream>
 #include <memory>
 #include <string>
+#include <thread>
+
+#include <fmt/format.h>
 
 #include "gpu/context.h"
 #include "render/renderer.h"
@@ -37,7 +41,6 @@ void pathTracing(benchmark::State& state, const std::string& debias) {
     }
     const double paths = double(state.iterations()) * spp * 256.0 * 256.0;
     state.counters["paths_per_s"] = benchmark::Counter(paths, benchmark::Counter::kIsRate);
-    state.counters["device"] = 0;
     state.SetLabel(context().info().name);
 }
 
@@ -47,4 +50,44 @@ BENCHMARK_CAPTURE(pathTracing, biased, std::string())->Arg(1)->Arg(4)->Arg(16)->
 BENCHMARK_CAPTURE(pathTracing, single_term, std::string("single_term"))->Arg(1)->Arg(4)->Arg(16)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(pathTracing, sum, std::string("sum"))->Arg(1)->Arg(4)->Arg(16)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-BENCHMARK_MAIN();
+// ---- Markdown table of the results, next to the usual console output ----
+class MarkdownReporter : public benchmark::ConsoleReporter {
+public:
+    void ReportRuns(const std::vector<Run>& runs) override {
+        ConsoleReporter::ReportRuns(runs);
+        for (const auto& r : runs) rows_.push_back(r);
+    }
+    std::string table() const {
+        std::string s = "| benchmark | k | Mpaths/s | ms per 16 spp |\n|---|---|---|---|\n";
+        for (const auto& r : rows_) {
+            std::string name = r.benchmark_name();
+            auto slash = name.rfind('/');
+            std::string k = name.substr(slash + 1, name.find('/', slash + 1) - slash - 1);
+            auto it = r.counters.find("paths_per_s");
+            double rate = it == r.counters.end() ? 0.0 : double(it->second);
+            s += fmt::format("| {} | {} | {:.2f} | {:.0f} |\n", name.substr(0, name.find('/')), k, rate * 1e-6,
+                             r.GetAdjustedRealTime());
+        }
+        return s;
+    }
+
+private:
+    std::vector<Run> rows_;
+};
+
+int main(int argc, char** argv) {
+    std::string markdown;
+    for (int i = 1; i < argc; ++i)
+        if (std::string(argv[i]).rfind("--markdown=", 0) == 0) markdown = std::string(argv[i]).substr(11);
+    benchmark::Initialize(&argc, argv);
+    MarkdownReporter reporter;
+    benchmark::RunSpecifiedBenchmarks(&reporter);
+    if (!markdown.empty()) {
+        std::ofstream out(markdown);
+        out << fmt::format("Device: {}; host threads: {}.\n\n", context().info().name,
+                           std::thread::hardware_concurrency())
+            << reporter.table();
+    }
+    benchmark::Shutdown();
+    return 0;
+}

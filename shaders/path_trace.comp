@@ -40,6 +40,22 @@ layout(push_constant) uniform Push { PathTracePush pc; };
 #include "shared/intersect.h"
 #include "path_tracer.glsl"
 
+// Camera ray of sample s (Tungsten's pinhole: pixel (0,0) top-left, fov horizontal) and the
+// level drawn for it.
+PathState startSample(uvec2 pixel, uint pixelIndex, uint s, LevelPmf pmf, out Rng rng) {
+    rng = rngCreate(pixelIndex, pc.sampleBase + s, pc.seed);
+    vec2 jitter = vec2(rngNext(rng), rngNext(rng));
+    if (kFilter == kFilterTent) jitter = vec2(sampleTent(jitter.x), sampleTent(jitter.y)) + 0.5;
+    else if (kFilter == kFilterDirac) jitter = vec2(0.5);
+    float w = float(pc.width);
+    vec3 local = vec3(-1.0 + 2.0 * (float(pixel.x) + jitter.x) / w,
+                      float(pc.height) / w - 2.0 * (float(pixel.y) + jitter.y) / w, pc.planeDistance);
+    vec3 dir = normalize(pc.cameraRight * local.x + pc.cameraUp * local.y + pc.cameraForward * local.z);
+    uint level = 0u;
+    if (kDebiasMode != kDebiasNone) level = levelSample(pmf, rngNext(rng));
+    return beginPath(pc.cameraPosition, dir, level);
+}
+
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
     if (pixel.x >= pc.width || pixel.y >= pc.height) return;
@@ -49,32 +65,25 @@ void main() {
 
     vec3 sumZ = vec3(0.0), sumZ2 = vec3(0.0), sumBase = vec3(0.0), sumCorrection = vec3(0.0);
     float dropped = 0.0;
-    for (uint s = 0u; s < pc.sampleCount; ++s) {
-        Rng rng = rngCreate(pixelIndex, pc.sampleBase + s, pc.seed);
+    if (pc.sampleCount == 0u) return;
 
-        // ---- Camera ray (Tungsten's pinhole: pixel (0,0) top-left, fov horizontal) ----
-        vec2 jitter = vec2(rngNext(rng), rngNext(rng));
-        if (kFilter == kFilterTent) jitter = vec2(sampleTent(jitter.x), sampleTent(jitter.y)) + 0.5;
-        else if (kFilter == kFilterDirac) jitter = vec2(0.5);
-        float w = float(pc.width);
-        vec3 local = vec3(-1.0 + 2.0 * (float(pixel.x) + jitter.x) / w,
-                          float(pc.height) / w - 2.0 * (float(pixel.y) + jitter.y) / w, pc.planeDistance);
-        vec3 dir = normalize(pc.cameraRight * local.x + pc.cameraUp * local.y + pc.cameraForward * local.z);
-
-        // ---- Level drawn per pixel sample ----
-        uint level = 0u;
-        if (kDebiasMode != kDebiasNone) level = levelSample(pmf, rngNext(rng));
-
-        PathResult r = tracePath(pc.cameraPosition, dir, level, pmf, rng);
-        vec3 z = r.base + r.correction;
+    uint s = 0u;
+    Rng rng;
+    PathState path = startSample(pixel, pixelIndex, s, pmf, rng);
+    while (true) {
+        if (pathStep(path, pmf, rng)) continue;
+        // ---- Path finished: accumulate, then start the next sample in the same lane ----
+        vec3 z = path.result.base + path.result.correction;
         if (any(isnan(z)) || any(isinf(z))) {
             dropped += 1.0;
-            continue;
+        } else {
+            sumZ += z;
+            sumZ2 += z * z;
+            sumBase += path.result.base;
+            sumCorrection += path.result.correction;
         }
-        sumZ += z;
-        sumZ2 += z * z;
-        sumBase += r.base;
-        sumCorrection += r.correction;
+        if (++s == pc.sampleCount) break;
+        path = startSample(pixel, pixelIndex, s, pmf, rng);
     }
 
     AccumRef accum = AccumRef(uvec2(pc.accumAddressLo, pc.accumAddressHi));

@@ -58,146 +58,165 @@ vec3 sampleDirectLambert(vec3 p, vec3 ng, vec3 n, vec3 albedo, inout Rng rng) {
     uint li = pickLight(rngNext(rng));
     LightGpu light = lights[li];
     float u1 = rngNext(rng), u2 = rngNext(rng);
-    vec3 f = albedo * kInvPi;
 
+    // Direction, shadow-ray length and unshadowed contribution for each kind of light.
+    vec3 wi;
+    float dist;
+    vec3 value;
     if (light.type == kLightPoint) {
         vec3 d = light.position - p;
-        float dist2 = dot(d, d);
-        float dist = sqrt(dist2);
-        vec3 wi = d / dist;
-        float cosS = dot(n, wi);
-        if (cosS <= 0.0) return vec3(0.0);
-        vec3 o = offsetRayOrigin(p, ng, wi);
-        if (traceAny(o, wi, length(light.position - o) * (1.0 - 1e-5))) return vec3(0.0);
-        return f * light.radiance * cosS / (dist2 * light.pmf);
-    }
-    if (light.type == kLightEnvironment) {
-        vec3 wi = sampleUniformSphere(u1, u2);
-        float cosS = dot(n, wi);
-        if (cosS <= 0.0) return vec3(0.0);
-        if (traceAny(offsetRayOrigin(p, ng, wi), wi, kInfinity)) return vec3(0.0);
+        dist = length(d);
+        wi = d / dist;
+        value = light.radiance * max(dot(n, wi), 0.0) / (dist * dist * light.pmf);
+    } else if (light.type == kLightEnvironment) {
+        wi = sampleUniformSphere(u1, u2);
+        dist = kInfinity;
+        float cosS = max(dot(n, wi), 0.0);
         float pdfLight = light.pmf / (4.0 * kPi);
-        float mis = powerHeuristic(pdfLight, cosS * kInvPi);
-        return f * light.radiance * cosS * mis / pdfLight;
-    }
-
-    // Area light: a uniform point on the emissive prim.
-    Prim pr = prims[light.prim];
-    vec3 q, nq;
-    if (kHasSpheres && pr.type == kPrimSphere) {
-        nq = sampleUniformSphere(u1, u2);
-        q = pr.p0 + nq * pr.p1.x;
-    } else if (kHasDisks && pr.type == kPrimDisk) {
-        q = sampleDisk(pr.p0, pr.n, pr.p1.x, u1, u2);
-        nq = pr.n;
+        value = light.radiance * cosS * powerHeuristic(pdfLight, cosS * kInvPi) / pdfLight;
     } else {
-        q = sampleTriangle(pr.p0, pr.p1, pr.p2, u1, u2);
-        nq = pr.n;
+        // Area light: a uniform point on the emissive prim.
+        Prim pr = prims[light.prim];
+        vec3 q, nq;
+        if (kHasSpheres && pr.type == kPrimSphere) {
+            nq = sampleUniformSphere(u1, u2);
+            q = pr.p0 + nq * pr.p1.x;
+        } else if (kHasDisks && pr.type == kPrimDisk) {
+            q = sampleDisk(pr.p0, pr.n, pr.p1.x, u1, u2);
+            nq = pr.n;
+        } else {
+            q = sampleTriangle(pr.p0, pr.p1, pr.p2, u1, u2);
+            nq = pr.n;
+        }
+        vec3 d = q - p;
+        dist = length(d);
+        wi = d / max(dist, 1e-30);
+        float cosS = dot(n, wi);
+        float cosL = -dot(wi, nq);
+        if (cosS <= 0.0 || cosL <= 0.0 || !(dist > 0.0)) return vec3(0.0);
+        float pdfLight = areaLightPdf(li, pr.area, dist, cosL);
+        value = light.radiance * cosS * powerHeuristic(pdfLight, cosS * kInvPi) / pdfLight;
+        dist *= 1.0 - 1e-4;  // stop short of the light itself
     }
-    vec3 d = q - p;
-    float dist2 = dot(d, d);
-    if (dist2 <= 0.0) return vec3(0.0);
-    float dist = sqrt(dist2);
-    vec3 wi = d / dist;
-    float cosS = dot(n, wi);
-    float cosL = -dot(wi, nq);
-    if (cosS <= 0.0 || cosL <= 0.0) return vec3(0.0);
+    if (!any(greaterThan(value, vec3(0.0)))) return vec3(0.0);
+
+    // One shadow ray for every kind of light.
     vec3 o = offsetRayOrigin(p, ng, wi);
-    float tMax = length(q - o);
-    if (traceAny(o, wi, tMax * (1.0 - 1e-4))) return vec3(0.0);
-    float pdfLight = areaLightPdf(li, pr.area, dist, cosL);
-    float mis = powerHeuristic(pdfLight, cosS * kInvPi);
-    return f * light.radiance * cosS * mis / pdfLight;
+    float tMax = dist < kInfinity ? max(dist - length(o - p), 0.0) : kInfinity;
+    if (traceAny(o, wi, tMax)) return vec3(0.0);
+    return albedo * kInvPi * value;
 }
 
-// ---- One camera path: all contributions up to the depth the level needs ----
-PathResult tracePath(vec3 origin, vec3 dir, uint level, LevelPmf pmf, inout Rng rng) {
-    PathResult r;
-    r.base = vec3(0.0);
-    r.correction = vec3(0.0);
-    uint limit = min(depthLimit(kDebiasMode, kMaxBounces, level), kMaxTraceDepth);
+// ---- One camera path as a state machine: pathStep() advances it by one vertex ----
+// The compute pass interleaves samples: when a lane's path ends it starts its next sample at
+// once, so lanes of a SIMD group do not wait for the longest path of the group.
+struct PathState {
+    vec3 origin;
+    vec3 dir;
+    vec3 throughput;
+    float pdfPrev;      // solid-angle pdf of the last BSDF sample
+    uint vertex;        // index of the vertex the next ray finds (1 = first hit)
+    uint level;         // telescope level of this sample
+    uint limit;         // deepest bounce with a non-zero weight
+    bool specularPrev;  // the camera "vertex" counts as specular for MIS
+    PathResult result;
+};
 
-    vec3 throughput = vec3(1.0);
-    bool specularPrev = true;  // the camera "vertex" counts as specular for MIS
-    float pdfPrev = 0.0;       // solid-angle pdf of the last BSDF sample
+PathState beginPath(vec3 origin, vec3 dir, uint level) {
+    PathState s;
+    s.origin = origin;
+    s.dir = dir;
+    s.throughput = vec3(1.0);
+    s.pdfPrev = 0.0;
+    s.vertex = 1u;
+    s.level = level;
+    s.limit = min(depthLimit(kDebiasMode, kMaxBounces, level), kMaxTraceDepth);
+    s.specularPrev = true;
+    s.result.base = vec3(0.0);
+    s.result.correction = vec3(0.0);
+    return s;
+}
 
-    for (uint v = 1u;; ++v) {
-        Hit hit;
-        if (!traceClosest(origin, dir, kInfinity, hit)) {
-            if (kEnvironmentLight != 0xffffffffu) {
-                LightGpu env = lights[kEnvironmentLight];
-                float mis = (specularPrev || !kLightSampling) ? 1.0
-                                                               : powerHeuristic(pdfPrev, env.pmf / (4.0 * kPi));
-                addContribution(r, v - 1u, throughput * env.radiance * mis, pmf, level);
-            }
-            break;
+// Traces the next ray of the path and scatters at the vertex it finds; false when the path ends.
+bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
+    uint v = s.vertex;
+    Hit hit;
+    if (!traceClosest(s.origin, s.dir, kInfinity, hit)) {
+        if (kEnvironmentLight != 0xffffffffu) {
+            LightGpu env = lights[kEnvironmentLight];
+            float mis = (s.specularPrev || !kLightSampling) ? 1.0
+                                                             : powerHeuristic(s.pdfPrev, env.pmf / (4.0 * kPi));
+            addContribution(s.result, v - 1u, s.throughput * env.radiance * mis, pmf, s.level);
         }
-        Prim pr = prims[hit.prim];
-        vec3 p = origin + dir * hit.t;
-        vec3 ng = pr.n;
-        if (kHasSpheres && pr.type == kPrimSphere) {
-            ng = normalize(p - pr.p0);
-            p = pr.p0 + ng * pr.p1.x;
-        }
-
-        // Emission reached by the last BSDF sample (or seen by the camera).
-        vec3 le = primEmission(pr, dir, ng);
-        if (any(greaterThan(le, vec3(0.0)))) {
-            float mis = 1.0;
-            if (!specularPrev && kLightSampling)
-                mis = powerHeuristic(pdfPrev, areaLightPdf(uint(pr.light), pr.area, hit.t, -dot(dir, ng)));
-            addContribution(r, v - 1u, throughput * le * mis, pmf, level);
-        }
-        if (v > limit) break;  // vertex v only adds light with v or more bounces
-
-        MaterialGpu m = materials[pr.material];
-        bool front = dot(dir, ng) < 0.0;
-        vec3 n = front ? ng : -ng;  // faces the incoming ray
-
-        if (m.type == kBsdfNull) break;
-        if (m.type == kBsdfLambert) {
-            if (!front && !kTwoSided) break;
-            if (kLightSampling && kLightCount > 0u)
-                addContribution(r, v, throughput * sampleDirectLambert(p, ng, n, m.albedo, rng), pmf, level);
-            float u1 = rngNext(rng), u2 = rngNext(rng);
-            dir = sampleCosineHemisphere(n, u1, u2);
-            float cosO = dot(dir, n);
-            if (cosO <= 0.0) break;
-            pdfPrev = cosO * kInvPi;
-            throughput *= m.albedo;
-            specularPrev = false;
-        } else if (kHasSpecular && m.type == kBsdfMirror) {
-            dir = reflect(dir, n);
-            throughput *= m.albedo;
-            specularPrev = true;
-        } else if (kHasSpecular && m.type == kBsdfDielectric) {
-            // Smooth dielectric: reflect with probability F, else refract.
-            float eta = front ? m.ior : 1.0 / m.ior;  // n_transmitted / n_incident
-            float cosI = -dot(dir, n);
-            float cosT;
-            float F = fresnelDielectric(cosI, eta, cosT);
-            bool refract = (m.flags & kMaterialRefraction) != 0u;
-            if (!refract || rngNext(rng) < F) {
-                dir = reflect(dir, n);
-                if (!refract) throughput *= F;
-            } else {
-                dir = normalize(dir / eta + n * (cosI / eta - cosT));
-            }
-            throughput *= m.albedo;
-            specularPrev = true;
-        } else {
-            break;
-        }
-
-        // Russian roulette as Tungsten does it: after bounce 2, once the throughput is small.
-        if (v > 2u) {
-            float q = maxComponent(throughput);
-            if (q < 0.1) {
-                if (rngNext(rng) >= q) break;
-                throughput /= q;
-            }
-        }
-        origin = offsetRayOrigin(p, ng, dir);
+        return false;
     }
-    return r;
+    Prim pr = prims[hit.prim];
+    vec3 p = s.origin + s.dir * hit.t;
+    vec3 ng = pr.n;
+    if (kHasSpheres && pr.type == kPrimSphere) {
+        ng = normalize(p - pr.p0);
+        p = pr.p0 + ng * pr.p1.x;
+    }
+
+    // Emission reached by the last BSDF sample (or seen by the camera).
+    vec3 le = primEmission(pr, s.dir, ng);
+    if (any(greaterThan(le, vec3(0.0)))) {
+        float mis = 1.0;
+        if (!s.specularPrev && kLightSampling)
+            mis = powerHeuristic(s.pdfPrev, areaLightPdf(uint(pr.light), pr.area, hit.t, -dot(s.dir, ng)));
+        addContribution(s.result, v - 1u, s.throughput * le * mis, pmf, s.level);
+    }
+    if (v > s.limit) return false;  // vertex v only adds light with v or more bounces
+
+    MaterialGpu m = materials[pr.material];
+    bool front = dot(s.dir, ng) < 0.0;
+    vec3 n = front ? ng : -ng;  // faces the incoming ray
+
+    if (m.type == kBsdfLambert) {
+        if (!front && !kTwoSided) return false;
+        if (kLightSampling && kLightCount > 0u)
+            addContribution(s.result, v, s.throughput * sampleDirectLambert(p, ng, n, m.albedo, rng), pmf, s.level);
+        float u1 = rngNext(rng), u2 = rngNext(rng);
+        s.dir = sampleCosineHemisphere(n, u1, u2);
+        float cosO = dot(s.dir, n);
+        if (cosO <= 0.0) return false;
+        s.pdfPrev = cosO * kInvPi;
+        s.throughput *= m.albedo;
+        s.specularPrev = false;
+    } else if (kHasSpecular && m.type == kBsdfMirror) {
+        s.dir = reflect(s.dir, n);
+        s.throughput *= m.albedo;
+        s.specularPrev = true;
+    } else if (kHasSpecular && m.type == kBsdfDielectric) {
+        // Smooth dielectric: reflect with probability F, else refract.
+        float eta = front ? m.ior : 1.0 / m.ior;  // n_transmitted / n_incident
+        float cosI = -dot(s.dir, n);
+        float cosT;
+        float F = fresnelDielectric(cosI, eta, cosT);
+        bool refract = (m.flags & kMaterialRefraction) != 0u;
+        if (!refract || rngNext(rng) < F) {
+            s.dir = reflect(s.dir, n);
+            if (!refract) s.throughput *= F;
+        } else {
+            s.dir = normalize(s.dir / eta + n * (cosI / eta - cosT));
+        }
+        s.throughput *= m.albedo;
+        s.specularPrev = true;
+    } else {
+        return false;  // null: black and opaque
+    }
+
+    // Russian roulette from the second bounce on: survive with probability max(throughput)
+    // (pbrt's rule; Tungsten waits until the throughput is below 0.1). It changes the noise,
+    // not the expectation, of every level.
+    if (v > 1u) {
+        float q = maxComponent(s.throughput);
+        if (q < 1.0) {
+            if (rngNext(rng) >= q) return false;
+            s.throughput /= q;
+        }
+    }
+    s.origin = offsetRayOrigin(p, ng, s.dir);
+    s.vertex = v + 1u;
+    return true;
 }

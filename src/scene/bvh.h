@@ -1,5 +1,5 @@
 // Bounding volume hierarchy over axis-aligned boxes, built on the host with the surface area
-// heuristic and traversed in GLSL (shaders/bvh_traverse.glsl) and on the CPU (tests).
+// heuristic and traversed in GLSL and on the CPU (tests) by shaders/shared/intersect.h.
 #pragma once
 
 #include <cstdint>
@@ -28,8 +28,10 @@ struct BvhNodeHost {
 static_assert(sizeof(BvhNodeHost) == 32);
 
 struct Bvh {
-    std::vector<BvhNodeHost> nodes;  // nodes[0] is the root (an empty leaf for no primitives)
-    std::vector<uint32_t> order;     // leaf slot -> input primitive index
+    // nodes[0] is the root. For no primitives it is the only node: count 0, first 0 and an empty
+    // box (lo > hi) that the traversal's box test never enters.
+    std::vector<BvhNodeHost> nodes;
+    std::vector<uint32_t> order;  // leaf slot -> input primitive index
 };
 
 // Builds a binned-SAH BVH over the boxes. maxLeafSize bounds primitives per leaf.

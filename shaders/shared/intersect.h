@@ -1,0 +1,287 @@
+// Ray-primitive intersection and BVH traversal, one source for the shaders and the CPU tests.
+//
+// Part 1 (always): intersectBox, intersectTriangle, intersectSphere, intersectDisk.
+// Part 2 (only when the includer has defined BVH_NODE and BVH_PRIM): intersectPrim,
+// traceClosest, traceAny. Before including this file the includer defines
+//   BVH_NODE(i)              the BvhNode i of the tree from buildBvh (src/scene/bvh.h),
+//   BVH_PRIM(i)              the Prim in leaf slot i (input primitives permuted by Bvh::order),
+//   kHasSpheres, kHasDisks   bool constants (specialisation constants in GLSL, true in C++),
+//   BVH_COUNT_NODE_VISIT()   optional: a statement run once per node entered (a test counter).
+// Part 2 has internal linkage in C++, so each translation unit binds its own buffers.
+//
+// Rays are origin + t dir with dir non-zero (not necessarily unit); hits count for t strictly
+// inside (tMin, tMax). The traversal queries use tMin = 0: callers offset secondary origins.
+#ifndef TELESCOPE_INTERSECT_H
+#define TELESCOPE_INTERSECT_H
+
+#include "shared/gpu_types.h"
+
+SHADER_NAMESPACE_BEGIN
+
+// Traversal stack entries. buildBvh keeps the tree depth below this (bvh.cpp, kMedianDepth).
+CONST uint kBvhStackSize = 64u;
+CONST uint kNoPrim = 0xffffffffu;
+
+// Closest hit: t, leaf slot of the primitive (index for BVH_PRIM), and for triangles the
+// barycentrics of p1 and p2 (zero for spheres and disks).
+struct Hit {
+    float t;
+    uint prim;
+    vec2 bary;
+};
+
+// ---- Ray-box ----
+
+// Reciprocal direction for the slab test. A zero component becomes a huge finite value, so the
+// slab products are finite or infinite but never 0 * inf = NaN.
+FN float safeReciprocal(float x) {
+    const float tiny = 1e-30f;
+    return 1.0f / (abs(x) > tiny ? x : (x < 0.0f ? -tiny : tiny));
+}
+
+FN vec3 safeInverse(vec3 dir) {
+    return vec3(safeReciprocal(dir.x), safeReciprocal(dir.y), safeReciprocal(dir.z));
+}
+
+// Slab test (Kay and Kajiya) of the ray against [lo, hi], clipped to [tMin, tMax]; tEnter is the
+// entry distance. The entry plane of each axis is chosen by the sign of the direction, so an
+// empty box (lo > hi, the root of an empty BVH) is never hit. The exit distance is widened by
+// 1 + 2 gamma(3) (pbrt-v4, section 6.8.2) so that rounding cannot cull a box the ray touches.
+// With a zero direction component a ray lying in the lo face plane enters and one in the hi
+// face plane does not; buildBvh widens node boxes by one ulp so no primitive lies on a face.
+FN bool intersectBox(vec3 lo, vec3 hi, vec3 origin, vec3 invDir, float tMin, float tMax,
+                     OUT(float) tEnter) {
+    bvec3 positive = greaterThanEqual(invDir, vec3(0.0f));
+    vec3 tIn = (mix(hi, lo, positive) - origin) * invDir;
+    vec3 tOut = (mix(lo, hi, positive) - origin) * invDir;
+    float t0 = max(max(tIn.x, tIn.y), max(tIn.z, tMin));
+    float t1 = min(min(min(tOut.x, tOut.y), tOut.z) * 1.00000036f, tMax);
+    tEnter = t0;
+    return t0 <= t1;
+}
+
+// ---- Ray-triangle ----
+
+// Moller and Trumbore (1997), two-sided. bary = (b1, b2): hit = (1-b1-b2) p0 + b1 p1 + b2 p2.
+// Rays parallel to the plane and triangles that are degenerate within rounding (|det| below
+// 1e-6 of |e1| |e2| |dir|, in L1 norms) report no hit.
+FN bool intersectTriangle(vec3 origin, vec3 dir, vec3 p0, vec3 p1, vec3 p2, float tMin,
+                          float tMax, OUT(float) t, OUT(vec2) bary) {
+    vec3 e1 = p1 - p0;
+    vec3 e2 = p2 - p0;
+    vec3 pv = cross(dir, e2);
+    float det = dot(e1, pv);
+    vec3 one = vec3(1.0f);
+    float scale = dot(abs(e1), one) * dot(abs(e2), one) * dot(abs(dir), one);
+    if (!(abs(det) > 1e-6f * scale)) return false;
+    float invDet = 1.0f / det;
+    vec3 s = origin - p0;
+    float b1 = dot(s, pv) * invDet;
+    if (!(b1 >= 0.0f && b1 <= 1.0f)) return false;
+    vec3 qv = cross(s, e1);
+    float b2 = dot(dir, qv) * invDet;
+    if (!(b2 >= 0.0f && b1 + b2 <= 1.0f)) return false;
+    float th = dot(e2, qv) * invDet;
+    if (!(th > tMin && th < tMax)) return false;
+    t = th;
+    bary = vec2(b1, b2);
+    return true;
+}
+
+// ---- Ray-sphere ----
+
+// Nearest root in (tMin, tMax), from outside or inside. The discriminant is computed from the
+// closest-approach vector and the roots by the citardauq pair, which avoids the cancellations
+// of the textbook formula (Haines et al., Ray Tracing Gems, chapter 7).
+FN bool intersectSphere(vec3 origin, vec3 dir, vec3 centre, float radius, float tMin,
+                        float tMax, OUT(float) t) {
+    vec3 f = origin - centre;
+    float a = dot(dir, dir);
+    float b = -dot(f, dir);
+    vec3 l = f + (b / a) * dir;
+    float r2 = radius * radius;
+    float disc = a * (r2 - dot(l, l));
+    if (!(disc >= 0.0f)) return false;
+    float c = dot(f, f) - r2;
+    float root = sqrt(disc);
+    float q = b >= 0.0f ? b + root : b - root;
+    float tA = q / a;
+    float tB = q != 0.0f ? c / q : tA;
+    float tNear = min(tA, tB);
+    float tFar = max(tA, tB);
+    if (tNear > tMin && tNear < tMax) {
+        t = tNear;
+        return true;
+    }
+    if (tFar > tMin && tFar < tMax) {
+        t = tFar;
+        return true;
+    }
+    return false;
+}
+
+// ---- Ray-disk ----
+
+// Plane hit within the radius, two-sided; normal is unit.
+FN bool intersectDisk(vec3 origin, vec3 dir, vec3 centre, float radius, vec3 normal,
+                      float tMin, float tMax, OUT(float) t) {
+    float denom = dot(normal, dir);
+    if (denom == 0.0f) return false;
+    float th = dot(centre - origin, normal) / denom;
+    if (!(th > tMin && th < tMax)) return false;
+    vec3 d = origin + th * dir - centre;
+    if (!(dot(d, d) <= radius * radius)) return false;
+    t = th;
+    return true;
+}
+
+SHADER_NAMESPACE_END
+
+#endif  // TELESCOPE_INTERSECT_H
+
+// ---- Part 2: queries against the scene's BVH (see the heading) ----
+#if defined(BVH_NODE) && defined(BVH_PRIM) && !defined(TELESCOPE_INTERSECT_TRACE_H)
+#define TELESCOPE_INTERSECT_TRACE_H
+
+#ifndef BVH_COUNT_NODE_VISIT
+#define BVH_COUNT_NODE_VISIT()
+#endif
+
+#ifdef __cplusplus
+#define TRACE_FN static inline
+#else
+#define TRACE_FN
+#endif
+
+SHADER_NAMESPACE_BEGIN
+
+// One primitive of any type; sphere and disk branches vanish when their constant is false.
+TRACE_FN bool intersectPrim(Prim p, vec3 origin, vec3 dir, float tMin, float tMax, OUT(float) t,
+                            OUT(vec2) bary) {
+    bary = vec2(0.0f);
+    if (p.type == kPrimTriangle)
+        return intersectTriangle(origin, dir, p.p0, p.p1, p.p2, tMin, tMax, t, bary);
+    if (kHasSpheres) {
+        if (p.type == kPrimSphere) return intersectSphere(origin, dir, p.p0, p.p1.x, tMin, tMax, t);
+    }
+    if (kHasDisks) {
+        if (p.type == kPrimDisk)
+            return intersectDisk(origin, dir, p.p0, p.p1.x, p.n, tMin, tMax, t);
+    }
+    return false;
+}
+
+// Closest hit with t in (0, tMax). Children are entered nearest first; the far child is pushed
+// with its entry distance and dropped on pop if a closer hit has been found meanwhile.
+TRACE_FN bool traceClosest(vec3 origin, vec3 dir, float tMax, OUT(Hit) hit) {
+    hit.t = tMax;
+    hit.prim = kNoPrim;
+    hit.bary = vec2(0.0f);
+    vec3 invDir = safeInverse(dir);
+    uint stack[kBvhStackSize];
+    float stackT[kBvhStackSize];
+    uint sp = 0u;
+    float tEnter = 0.0f;
+    BvhNode node = BVH_NODE(0u);
+    if (!intersectBox(node.lo, node.hi, origin, invDir, 0.0f, tMax, tEnter)) return false;
+    while (true) {
+        BVH_COUNT_NODE_VISIT();
+        bool descend = false;
+        if (node.count > 0u) {
+            // Leaf: test its primitives against the shrinking interval
+            for (uint i = node.first; i < node.first + node.count; ++i) {
+                float t = 0.0f;
+                vec2 bary = vec2(0.0f);
+                if (intersectPrim(BVH_PRIM(i), origin, dir, 0.0f, hit.t, t, bary)) {
+                    hit.t = t;
+                    hit.prim = i;
+                    hit.bary = bary;
+                }
+            }
+        } else {
+            // Inner node: enter the nearer child, push the farther one
+            uint ia = node.first;
+            BvhNode a = BVH_NODE(ia);
+            BvhNode b = BVH_NODE(ia + 1u);
+            float ta = 0.0f;
+            float tb = 0.0f;
+            bool hitA = intersectBox(a.lo, a.hi, origin, invDir, 0.0f, hit.t, ta);
+            bool hitB = intersectBox(b.lo, b.hi, origin, invDir, 0.0f, hit.t, tb);
+            if (hitA && hitB) {
+                bool bFirst = tb < ta;
+                stack[sp] = bFirst ? ia : ia + 1u;
+                stackT[sp] = bFirst ? ta : tb;
+                ++sp;
+                node = bFirst ? b : a;
+                descend = true;
+            } else if (hitA || hitB) {
+                node = hitA ? a : b;
+                descend = true;
+            }
+        }
+        if (descend) continue;
+        // Pop the next subtree that can still hold a closer hit
+        bool popped = false;
+        while (sp > 0u && !popped) {
+            --sp;
+            if (stackT[sp] <= hit.t) {
+                node = BVH_NODE(stack[sp]);
+                popped = true;
+            }
+        }
+        if (!popped) break;
+    }
+    return hit.prim != kNoPrim;
+}
+
+// Whether anything is hit with t in (0, tMax): shadow rays. Stops at the first hit found.
+TRACE_FN bool traceAny(vec3 origin, vec3 dir, float tMax) {
+    vec3 invDir = safeInverse(dir);
+    uint stack[kBvhStackSize];
+    uint sp = 0u;
+    float tEnter = 0.0f;
+    BvhNode node = BVH_NODE(0u);
+    if (!intersectBox(node.lo, node.hi, origin, invDir, 0.0f, tMax, tEnter)) return false;
+    while (true) {
+        BVH_COUNT_NODE_VISIT();
+        bool descend = false;
+        if (node.count > 0u) {
+            // Leaf: any primitive hit ends the query
+            for (uint i = node.first; i < node.first + node.count; ++i) {
+                float t = 0.0f;
+                vec2 bary = vec2(0.0f);
+                if (intersectPrim(BVH_PRIM(i), origin, dir, 0.0f, tMax, t, bary)) return true;
+            }
+        } else {
+            // Inner node: enter the nearer child, push the farther one
+            uint ia = node.first;
+            BvhNode a = BVH_NODE(ia);
+            BvhNode b = BVH_NODE(ia + 1u);
+            float ta = 0.0f;
+            float tb = 0.0f;
+            bool hitA = intersectBox(a.lo, a.hi, origin, invDir, 0.0f, tMax, ta);
+            bool hitB = intersectBox(b.lo, b.hi, origin, invDir, 0.0f, tMax, tb);
+            if (hitA && hitB) {
+                bool bFirst = tb < ta;
+                stack[sp] = bFirst ? ia : ia + 1u;
+                ++sp;
+                node = bFirst ? b : a;
+                descend = true;
+            } else if (hitA || hitB) {
+                node = hitA ? a : b;
+                descend = true;
+            }
+        }
+        if (descend) continue;
+        if (sp == 0u) break;
+        --sp;
+        node = BVH_NODE(stack[sp]);
+    }
+    return false;
+}
+
+SHADER_NAMESPACE_END
+
+#undef TRACE_FN
+
+#endif  // TELESCOPE_INTERSECT_TRACE_H

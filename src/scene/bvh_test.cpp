@@ -1,0 +1,575 @@
+// Tests of the BVH builder (bvh.cpp) and of the shared ray queries (shaders/shared/intersect.h):
+// primitive tests against analytic answers, BVH traversal against brute force over random
+// scenes, and the structural invariants of the tree.
+#include "scene/bvh.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "shared/gpu_types.h"
+
+// Stand-ins for the shaders' storage buffers, read by the traversal through the macros below.
+namespace bvh_test {
+static std::vector<telescope::shader::BvhNode> nodes;
+static std::vector<telescope::shader::Prim> prims;
+static uint64_t nodeVisits = 0;
+}  // namespace bvh_test
+
+constexpr bool kHasSpheres = true;
+constexpr bool kHasDisks = true;
+#define BVH_NODE(i) (::bvh_test::nodes.at(i))
+#define BVH_PRIM(i) (::bvh_test::prims.at(i))
+#define BVH_COUNT_NODE_VISIT() (++::bvh_test::nodeVisits)
+#include "shared/intersect.h"
+
+namespace telescope {
+namespace {
+
+using glm::vec2;
+using glm::vec3;
+using shader::Hit;
+using shader::Prim;
+
+// ---- Primitives and their boxes ----
+
+Prim triangle(vec3 a, vec3 b, vec3 c) {
+    Prim p{};
+    p.type = shader::kPrimTriangle;
+    p.p0 = a;
+    p.p1 = b;
+    p.p2 = c;
+    p.light = -1;
+    return p;
+}
+
+Prim sphere(vec3 centre, float radius) {
+    Prim p{};
+    p.type = shader::kPrimSphere;
+    p.p0 = centre;
+    p.p1 = vec3(radius, 0.0f, 0.0f);
+    p.light = -1;
+    return p;
+}
+
+Prim disk(vec3 centre, float radius, vec3 normal) {
+    Prim p = sphere(centre, radius);
+    p.type = shader::kPrimDisk;
+    p.n = normal;
+    return p;
+}
+
+Aabb boundsOf(const Prim& p) {
+    Aabb b;
+    if (p.type == shader::kPrimTriangle) {
+        b.extend(p.p0);
+        b.extend(p.p1);
+        b.extend(p.p2);
+    } else if (p.type == shader::kPrimSphere) {
+        b.extend(p.p0 - vec3(p.p1.x));
+        b.extend(p.p0 + vec3(p.p1.x));
+    } else {
+        vec3 half = p.p1.x * glm::sqrt(glm::max(vec3(1.0f) - p.n * p.n, vec3(0.0f)));
+        b.extend(p.p0 - half);
+        b.extend(p.p0 + half);
+    }
+    return b;
+}
+
+bool contains(const Aabb& outer, const Aabb& inner) {
+    return glm::all(glm::lessThanEqual(outer.lo, inner.lo)) &&
+           glm::all(glm::lessThanEqual(inner.hi, outer.hi));
+}
+
+// ---- Scenes: the build, and the traversal buffers in leaf order ----
+
+struct Scene {
+    std::vector<Prim> prims;  // input order
+    std::vector<Aabb> boxes;
+    Bvh bvh;
+};
+
+Scene load(std::vector<Prim> prims, uint32_t maxLeafSize) {
+    Scene s;
+    s.prims = std::move(prims);
+    for (const Prim& p : s.prims) s.boxes.push_back(boundsOf(p));
+    s.bvh = buildBvh(s.boxes, maxLeafSize);
+    bvh_test::nodes.clear();
+    for (const BvhNodeHost& n : s.bvh.nodes) bvh_test::nodes.push_back({n.lo, n.first, n.hi, n.count});
+    bvh_test::prims.clear();
+    for (uint32_t i : s.bvh.order) bvh_test::prims.push_back(s.prims.at(i));
+    return s;
+}
+
+struct Random {
+    std::mt19937 rng;
+    explicit Random(uint32_t seed) : rng(seed) {}
+    float uniform(float a, float b) { return std::uniform_real_distribution<float>(a, b)(rng); }
+    int integer(int a, int b) { return std::uniform_int_distribution<int>(a, b)(rng); }
+    float logUniform(float a, float b) { return a * std::pow(b / a, uniform(0.0f, 1.0f)); }
+    vec3 point(float r) { return vec3(uniform(-r, r), uniform(-r, r), uniform(-r, r)); }
+    vec3 direction() {
+        std::normal_distribution<float> g;
+        vec3 d(g(rng), g(rng), g(rng));
+        return glm::length(d) > 1e-6f ? glm::normalize(d) : vec3(0.0f, 0.0f, 1.0f);
+    }
+    vec3 axis() {
+        vec3 d(0.0f);
+        d[integer(0, 2)] = integer(0, 1) ? 1.0f : -1.0f;
+        return d;
+    }
+};
+
+// A soup of triangles (tiny to huge, degenerate, axis-aligned), spheres and disks in
+// [-10, 10]^3, with exact duplicates and concentric spheres (shared centroids). enclosing adds
+// primitives around everything, so rays start inside them.
+std::vector<Prim> randomPrims(Random& r, int count, bool enclosing) {
+    std::vector<Prim> prims;
+    for (int i = 0; i < count; ++i) {
+        vec3 c = r.point(10.0f);
+        switch (i % 16) {
+        case 9: {
+            float s = i % 64 == 9 ? r.logUniform(20.0f, 500.0f) : r.logUniform(1e-3f, 3.0f);
+            prims.push_back(triangle(c + s * r.direction(), c + s * r.direction(), c + s * r.direction()));
+            break;
+        }
+        case 10: {
+            // Degenerate triangles, built with exact arithmetic so they are degenerate in floats
+            vec3 a = glm::floor(c * 4.0f) / 4.0f;
+            vec3 e = vec3(r.integer(-4, 4), r.integer(-4, 4), r.integer(-4, 4)) / 8.0f;
+            int kind = (i / 16) % 4;
+            if (kind == 0) prims.push_back(triangle(a, a, a));
+            if (kind == 1) prims.push_back(triangle(a, a, a + e));
+            if (kind == 2) prims.push_back(triangle(a, a + e, a + e));
+            if (kind == 3) prims.push_back(triangle(a, a + e, a + 2.0f * e));
+            break;
+        }
+        case 11: {
+            // Axis-aligned triangle: a flat box
+            int axis = r.integer(0, 2);
+            float s = r.logUniform(1e-2f, 3.0f);
+            vec3 v[3];
+            for (vec3& p : v) {
+                p = c + s * r.direction();
+                p[axis] = c[axis];
+            }
+            prims.push_back(triangle(v[0], v[1], v[2]));
+            break;
+        }
+        case 12:
+        case 13:
+            prims.push_back(sphere(c, r.logUniform(1e-3f, 2.0f)));
+            break;
+        case 14:
+        case 15:
+            prims.push_back(disk(c, r.logUniform(1e-3f, 2.0f), i % 32 < 16 ? r.direction() : r.axis()));
+            break;
+        default: {
+            float s = r.logUniform(1e-3f, 3.0f);
+            prims.push_back(triangle(c + s * r.direction(), c + s * r.direction(), c + s * r.direction()));
+            break;
+        }
+        }
+    }
+    for (int i = 0; i < count / 20; ++i) prims.push_back(prims[size_t(r.integer(0, count - 1))]);
+    vec3 shared = r.point(5.0f);
+    for (int i = 0; i < 20; ++i) prims.push_back(sphere(shared, 0.05f * float(i + 1)));
+    if (enclosing) {
+        prims.push_back(sphere(vec3(0.0f), 100.0f));
+        prims.push_back(disk(vec3(0.5f), 200.0f, glm::normalize(vec3(1.0f, 2.0f, 3.0f))));
+        prims.push_back(triangle(vec3(-300.0f, -300.0f, 1.0f), vec3(300.0f, -300.0f, 1.0f), vec3(0.0f, 300.0f, 1.0f)));
+    }
+    return prims;
+}
+
+struct TestRay {
+    vec3 origin, dir;
+    float tMax;
+};
+
+// Rays of every kind the traversal must handle: random, axis-aligned (two zero components),
+// one zero component, unnormalised, from a primitive's vertex or centre, from inside a
+// primitive's box; with infinite and finite tMax.
+std::vector<TestRay> randomRays(Random& r, int count, const std::vector<Prim>& prims) {
+    std::vector<TestRay> rays;
+    for (int i = 0; i < count; ++i) {
+        TestRay ray{r.point(12.0f), r.direction(), i % 3 == 0 ? r.uniform(0.05f, 15.0f) : shader::kInfinity};
+        const Prim& p = prims[size_t(r.integer(0, int(prims.size()) - 1))];
+        switch (i % 8) {
+        case 3: ray.dir = r.axis(); break;
+        case 4: ray.dir[r.integer(0, 2)] = 0.0f; break;
+        case 5: ray.dir *= r.logUniform(1e-2f, 1e2f); break;
+        case 6:
+            ray.origin = p.p0;
+            if (i % 16 < 8) ray.dir = r.axis();
+            break;
+        case 7: {
+            Aabb b = boundsOf(p);
+            ray.origin = glm::mix(b.lo, b.hi, vec3(r.uniform(0, 1), r.uniform(0, 1), r.uniform(0, 1)));
+            ray.dir = r.axis();
+            break;
+        }
+        default: break;
+        }
+        rays.push_back(ray);
+    }
+    return rays;
+}
+
+// ---- Brute force reference over the primitives in input order ----
+
+bool closestBrute(const std::vector<Prim>& prims, const TestRay& ray, float& t, uint32_t& index) {
+    t = ray.tMax;
+    index = shader::kNoPrim;
+    for (uint32_t i = 0; i < prims.size(); ++i) {
+        float ti = 0.0f;
+        vec2 bary(0.0f);
+        if (shader::intersectPrim(prims[i], ray.origin, ray.dir, 0.0f, t, ti, bary)) {
+            t = ti;
+            index = i;
+        }
+    }
+    return index != shader::kNoPrim;
+}
+
+bool anyBrute(const std::vector<Prim>& prims, const TestRay& ray) {
+    for (const Prim& p : prims) {
+        float t = 0.0f;
+        vec2 bary(0.0f);
+        if (shader::intersectPrim(p, ray.origin, ray.dir, 0.0f, ray.tMax, t, bary)) return true;
+    }
+    return false;
+}
+
+// traceClosest and traceAny against brute force for every ray; returns the number of hits.
+// Different primitives are accepted only for ties (t within 1e-5 relative).
+int expectMatchesBruteForce(const Scene& s, const std::vector<TestRay>& rays) {
+    int hits = 0, failures = 0;
+    for (size_t k = 0; k < rays.size() && failures < 10; ++k) {
+        const TestRay& ray = rays[k];
+        float tRef = 0.0f;
+        uint32_t ref = 0;
+        bool hitRef = closestBrute(s.prims, ray, tRef, ref);
+        Hit hit{};
+        bool hitBvh = shader::traceClosest(ray.origin, ray.dir, ray.tMax, hit);
+        bool anyBvh = shader::traceAny(ray.origin, ray.dir, ray.tMax);
+        bool anyRef = anyBrute(s.prims, ray);
+        hits += hitRef;
+
+        bool ok = hitBvh == hitRef && anyBvh == anyRef && anyRef == hitRef;
+        if (ok && hitRef) {
+            uint32_t prim = s.bvh.order.at(hit.prim);
+            ok = prim == ref ? hit.t == tRef
+                             : std::abs(hit.t - tRef) <= 1e-5f * std::max(hit.t, tRef);
+        }
+        if (!ok) {
+            ++failures;
+            ADD_FAILURE() << "ray " << k << " origin (" << ray.origin.x << ", " << ray.origin.y << ", "
+                          << ray.origin.z << ") dir (" << ray.dir.x << ", " << ray.dir.y << ", "
+                          << ray.dir.z << ") tMax " << ray.tMax << ": bvh " << hitBvh << " prim "
+                          << (hitBvh ? s.bvh.order.at(hit.prim) : 0) << " t " << hit.t
+                          << " any " << anyBvh << "; brute force " << hitRef << " prim " << ref
+                          << " t " << tRef << " any " << anyRef;
+        }
+    }
+    return hits;
+}
+
+// ---- Structural invariants ----
+
+struct TreeStats {
+    uint32_t maxDepth = 0;
+    uint32_t leaves = 0;
+};
+
+// Every node reached once from the root, children adjacent, boxes nested, leaves holding
+// 1..maxLeafSize primitives whose ranges tile [0, n), order a permutation.
+void expectValidTree(const Bvh& bvh, const std::vector<Aabb>& boxes, uint32_t maxLeafSize,
+                     TreeStats& stats) {
+    const size_t n = boxes.size();
+    ASSERT_EQ(bvh.order.size(), n);
+    std::vector<int> seen(n, 0);
+    for (uint32_t i : bvh.order) {
+        ASSERT_LT(i, n);
+        ++seen[i];
+    }
+    EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](int c) { return c == 1; }));
+
+    ASSERT_FALSE(bvh.nodes.empty());
+    std::vector<int> reached(bvh.nodes.size(), 0);
+    std::vector<int> slots(n, 0);
+    std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 0u}};
+    while (!stack.empty()) {
+        auto [index, depth] = stack.back();
+        stack.pop_back();
+        ASSERT_LT(index, bvh.nodes.size());
+        ASSERT_EQ(reached[index]++, 0) << "node " << index << " reached twice";
+        stats.maxDepth = std::max(stats.maxDepth, depth);
+        const BvhNodeHost& node = bvh.nodes[index];
+        Aabb box{node.lo, node.hi};
+        if (node.count == 0) {
+            ASSERT_GE(node.first, 1u);
+            ASSERT_LT(size_t(node.first) + 1, bvh.nodes.size());
+            for (uint32_t c = node.first; c <= node.first + 1; ++c) {
+                const BvhNodeHost& child = bvh.nodes[c];
+                EXPECT_TRUE(contains(box, Aabb{child.lo, child.hi})) << "node " << c;
+                stack.push_back({c, depth + 1});
+            }
+        } else {
+            ++stats.leaves;
+            EXPECT_LE(node.count, maxLeafSize);
+            ASSERT_LE(size_t(node.first) + node.count, n);
+            for (uint32_t i = node.first; i < node.first + node.count; ++i) {
+                ++slots[i];
+                EXPECT_TRUE(contains(box, boxes[bvh.order[i]])) << "slot " << i;
+            }
+        }
+    }
+    EXPECT_TRUE(std::all_of(reached.begin(), reached.end(), [](int c) { return c == 1; }));
+    EXPECT_TRUE(std::all_of(slots.begin(), slots.end(), [](int c) { return c == 1; }));
+    EXPECT_LT(stats.maxDepth, shader::kBvhStackSize);
+}
+
+// ---- Primitive tests ----
+
+TEST(Intersect, BoxWithZeroDirectionComponents) {
+    vec3 lo(0.0f), hi(1.0f);
+    float t = -1.0f;
+    auto box = [&](vec3 o, vec3 d, float tMax) {
+        return shader::intersectBox(lo, hi, o, shader::safeInverse(d), 0.0f, tMax, t);
+    };
+    EXPECT_TRUE(box(vec3(-5.0f, 0.5f, 0.5f), vec3(1.0f, 0.0f, 0.0f), shader::kInfinity));
+    EXPECT_FLOAT_EQ(t, 5.0f);
+    EXPECT_FALSE(box(vec3(-5.0f, 0.5f, 0.5f), vec3(1.0f, 0.0f, 0.0f), 4.0f));
+    EXPECT_FALSE(box(vec3(-5.0f, 2.0f, 0.5f), vec3(1.0f, 0.0f, 0.0f), shader::kInfinity));
+    EXPECT_FALSE(box(vec3(-5.0f, 0.5f, 0.5f), vec3(-1.0f, 0.0f, 0.0f), shader::kInfinity));
+    EXPECT_FALSE(box(vec3(0.5f, 0.5f, 2.0f), vec3(0.0f, -0.0f, 1.0f), shader::kInfinity));
+    // Origin in the lo face plane, moving inside it (the hi face is covered by buildBvh's
+    // one-ulp widening, see Bvh.RayInFacePlaneOfBounds)
+    EXPECT_TRUE(box(vec3(-1.0f, 0.0f, 0.5f), vec3(1.0f, 0.0f, 0.0f), shader::kInfinity));
+    // From inside the entry is tMin
+    EXPECT_TRUE(box(vec3(0.5f), vec3(0.0f, 0.0f, -1.0f), shader::kInfinity));
+    EXPECT_EQ(t, 0.0f);
+    // A flat box is hit through its plane
+    hi = vec3(1.0f, 1.0f, 0.0f);
+    EXPECT_TRUE(box(vec3(0.5f, 0.5f, 3.0f), vec3(0.0f, 0.0f, -1.0f), shader::kInfinity));
+    EXPECT_FLOAT_EQ(t, 3.0f);
+    // The empty box never
+    Aabb empty;
+    lo = empty.lo;
+    hi = empty.hi;
+    Random r(7);
+    for (int i = 0; i < 100; ++i)
+        EXPECT_FALSE(box(r.point(10.0f), i % 2 ? r.axis() : r.direction(), shader::kInfinity));
+}
+
+TEST(Intersect, TriangleBarycentricsOnBothSides) {
+    vec3 p0(0.0f), p1(1.0f, 0.0f, 0.0f), p2(0.0f, 1.0f, 0.0f);
+    float t = 0.0f;
+    vec2 bary(0.0f);
+    auto tri = [&](vec3 o, vec3 d) {
+        return shader::intersectTriangle(o, d, p0, p1, p2, 0.0f, shader::kInfinity, t, bary);
+    };
+    ASSERT_TRUE(tri(vec3(0.25f, 0.5f, 1.0f), vec3(0.0f, 0.0f, -1.0f)));
+    EXPECT_FLOAT_EQ(t, 1.0f);
+    EXPECT_FLOAT_EQ(bary.x, 0.25f);
+    EXPECT_FLOAT_EQ(bary.y, 0.5f);
+    ASSERT_TRUE(tri(vec3(0.25f, 0.25f, -2.0f), vec3(0.0f, 0.0f, 2.0f)));
+    EXPECT_FLOAT_EQ(t, 1.0f);
+    EXPECT_FALSE(tri(vec3(0.75f, 0.75f, 1.0f), vec3(0.0f, 0.0f, -1.0f)));
+    EXPECT_FALSE(tri(vec3(0.25f, 0.25f, 1.0f), vec3(0.0f, 0.0f, 1.0f)));
+    EXPECT_FALSE(tri(vec3(-1.0f, 0.25f, 0.0f), vec3(1.0f, 0.0f, 0.0f)));  // in the plane
+    // Degenerate triangles are never hit
+    p1 = p0;
+    EXPECT_FALSE(tri(vec3(0.0f, 0.0f, 1.0f), vec3(0.0f, 0.0f, -1.0f)));
+    p1 = vec3(1.0f, 1.0f, 0.0f);
+    p2 = vec3(2.0f, 2.0f, 0.0f);
+    EXPECT_FALSE(tri(vec3(0.5f, 0.5f, 1.0f), vec3(0.0f, 0.0f, -1.0f)));
+}
+
+TEST(Intersect, SphereFromOutsideAndInside) {
+    vec3 c(0.0f, 0.0f, 5.0f);
+    float t = 0.0f;
+    auto sph = [&](vec3 o, vec3 d, float tMin, float radius) {
+        return shader::intersectSphere(o, d, c, radius, tMin, shader::kInfinity, t);
+    };
+    ASSERT_TRUE(sph(vec3(0.0f), vec3(0.0f, 0.0f, 1.0f), 0.0f, 1.0f));
+    EXPECT_FLOAT_EQ(t, 4.0f);
+    ASSERT_TRUE(sph(vec3(0.0f), vec3(0.0f, 0.0f, 2.0f), 0.0f, 1.0f));
+    EXPECT_FLOAT_EQ(t, 2.0f);
+    ASSERT_TRUE(sph(c, vec3(0.6f, 0.0f, 0.8f), 0.0f, 1.0f));
+    EXPECT_FLOAT_EQ(t, 1.0f);
+    ASSERT_TRUE(sph(vec3(0.0f), vec3(0.0f, 0.0f, 1.0f), 4.5f, 1.0f));
+    EXPECT_FLOAT_EQ(t, 6.0f);
+    EXPECT_FALSE(sph(vec3(0.0f), vec3(0.0f, 0.0f, -1.0f), 0.0f, 1.0f));
+    EXPECT_FALSE(sph(vec3(0.0f, 1.5f, 0.0f), vec3(0.0f, 0.0f, 1.0f), 0.0f, 1.0f));
+    // Leaving from the surface: no hit at t = 0
+    EXPECT_FALSE(sph(vec3(0.0f, 0.0f, 4.0f), vec3(0.0f, 0.0f, -1.0f), 0.0f, 1.0f));
+    // A small sphere far away keeps its precision
+    c = vec3(0.0f, 0.0f, 1e4f);
+    ASSERT_TRUE(sph(vec3(0.0f), vec3(0.0f, 0.0f, 1.0f), 0.0f, 1e-2f));
+    EXPECT_NEAR(t, 1e4f - 1e-2f, 2e-3f);
+}
+
+TEST(Intersect, DiskIsTwoSided) {
+    vec3 c(0.0f), n(0.0f, 0.0f, 1.0f);
+    float t = 0.0f;
+    auto dsk = [&](vec3 o, vec3 d) {
+        return shader::intersectDisk(o, d, c, 1.0f, n, 0.0f, shader::kInfinity, t);
+    };
+    ASSERT_TRUE(dsk(vec3(0.5f, 0.0f, 3.0f), vec3(0.0f, 0.0f, -1.0f)));
+    EXPECT_FLOAT_EQ(t, 3.0f);
+    ASSERT_TRUE(dsk(vec3(0.0f, -0.5f, -3.0f), vec3(0.0f, 0.0f, 1.0f)));
+    EXPECT_FLOAT_EQ(t, 3.0f);
+    EXPECT_FALSE(dsk(vec3(0.8f, 0.8f, 3.0f), vec3(0.0f, 0.0f, -1.0f)));
+    EXPECT_FALSE(dsk(vec3(-3.0f, 0.0f, 0.0f), vec3(1.0f, 0.0f, 0.0f)));
+    EXPECT_FALSE(dsk(vec3(0.0f, 0.0f, 3.0f), vec3(0.0f, 0.0f, 1.0f)));
+}
+
+// ---- BVH ----
+
+TEST(Bvh, EmptyInput) {
+    Scene s = load({}, 4);
+    ASSERT_EQ(s.bvh.nodes.size(), 1u);
+    const BvhNodeHost& root = s.bvh.nodes[0];
+    EXPECT_EQ(root.count, 0u);
+    EXPECT_EQ(root.first, 0u);
+    EXPECT_TRUE(glm::all(glm::greaterThan(root.lo, root.hi)));
+    EXPECT_TRUE(s.bvh.order.empty());
+    Random r(1);
+    for (int i = 0; i < 100; ++i) {
+        vec3 o = i == 0 ? vec3(0.0f) : r.point(10.0f);
+        vec3 d = i % 2 ? r.axis() : r.direction();
+        Hit hit{};
+        EXPECT_FALSE(shader::traceClosest(o, d, shader::kInfinity, hit));
+        EXPECT_EQ(hit.prim, shader::kNoPrim);
+        EXPECT_FALSE(shader::traceAny(o, d, shader::kInfinity));
+    }
+}
+
+TEST(Bvh, SinglePrimitive) {
+    Scene s = load({sphere(vec3(1.0f, 2.0f, 3.0f), 0.5f)}, 4);
+    ASSERT_EQ(s.bvh.nodes.size(), 1u);
+    EXPECT_EQ(s.bvh.nodes[0].count, 1u);
+    EXPECT_EQ(s.bvh.nodes[0].first, 0u);
+    EXPECT_EQ(s.bvh.order, std::vector<uint32_t>{0u});
+    Hit hit{};
+    ASSERT_TRUE(shader::traceClosest(vec3(1.0f, 2.0f, 0.0f), vec3(0.0f, 0.0f, 1.0f), shader::kInfinity, hit));
+    EXPECT_EQ(hit.prim, 0u);
+    EXPECT_FLOAT_EQ(hit.t, 2.5f);
+    EXPECT_FALSE(shader::traceAny(vec3(1.0f, 2.0f, 0.0f), vec3(0.0f, 0.0f, 1.0f), 2.0f));
+    EXPECT_FALSE(shader::traceClosest(vec3(0.0f), vec3(1.0f, 0.0f, 0.0f), shader::kInfinity, hit));
+}
+
+TEST(Bvh, StructureOfRandomScenes) {
+    for (uint32_t maxLeafSize : {1u, 2u, 4u, 8u, 16u}) {
+        SCOPED_TRACE(maxLeafSize);
+        Random r(100 + maxLeafSize);
+        Scene s = load(randomPrims(r, 3000, maxLeafSize % 2 == 0), maxLeafSize);
+        TreeStats stats;
+        expectValidTree(s.bvh, s.boxes, maxLeafSize, stats);
+    }
+}
+
+TEST(Bvh, TraversalMatchesBruteForce) {
+    Random r(2024);
+    Scene s = load(randomPrims(r, 2000, false), 4);
+    int hits = expectMatchesBruteForce(s, randomRays(r, 2000, s.prims));
+    EXPECT_GT(hits, 200);  // the scene is neither empty nor a wall
+    EXPECT_LT(hits, 1800);
+}
+
+TEST(Bvh, TraversalMatchesBruteForceInsideEnclosingPrimitives) {
+    for (uint32_t maxLeafSize : {1u, 8u}) {
+        SCOPED_TRACE(maxLeafSize);
+        Random r(77 + maxLeafSize);
+        Scene s = load(randomPrims(r, 1000, true), maxLeafSize);
+        expectMatchesBruteForce(s, randomRays(r, 1000, s.prims));
+    }
+}
+
+// All centroids equal: no axis can be binned, so nodes split in the middle of the list.
+TEST(Bvh, CoincidentCentroids) {
+    std::vector<Prim> prims;
+    vec3 c(1.0f, -2.0f, 0.5f);
+    for (int i = 0; i < 600; ++i) prims.push_back(sphere(c, float(i + 1) / 128.0f));  // exact
+    for (int i = 0; i < 300; ++i) prims.push_back(triangle(c - vec3(1.0f), c + vec3(1.0f, 0.0f, 1.0f), c + vec3(1.0f, 1.0f, 0.0f)));
+    for (int i = 0; i < 300; ++i) prims.push_back(disk(c, 0.5f, vec3(0.0f, 1.0f, 0.0f)));
+    Scene s = load(prims, 4);
+    TreeStats stats;
+    expectValidTree(s.bvh, s.boxes, 4, stats);
+    EXPECT_EQ(stats.maxDepth, 9u);  // 1200 -> 600 -> ... -> 3: the list halves per level
+    Random r(5);
+    expectMatchesBruteForce(s, randomRays(r, 400, s.prims));
+}
+
+// Centroids at x = 2^-k: each SAH split peels the few largest off the rest, and the depth limit
+// must switch to median splits before the traversal stack would overflow.
+TEST(Bvh, DepthFitsTraversalStack) {
+    std::vector<Prim> prims;
+    for (int k = 0; k <= 120; ++k) prims.push_back(sphere(vec3(std::ldexp(1.0f, -k), 0.0f, 0.0f), std::ldexp(0.25f, -k)));
+    Scene s = load(prims, 1);
+    TreeStats stats;
+    expectValidTree(s.bvh, s.boxes, 1, stats);
+    EXPECT_GT(stats.maxDepth, 31u);  // the limit was reached (else this scene tests nothing)
+    // Rays down onto each sphere while squares of the coordinates stay normal floats
+    for (int k = 0; k <= 60; ++k) {
+        float x = std::ldexp(1.0f, -k);
+        vec3 o(x, 0.0f, 3.0f * x), d(0.0f, 0.0f, -1.0f);
+        Hit hit{};
+        ASSERT_TRUE(shader::traceClosest(o, d, shader::kInfinity, hit)) << k;
+        EXPECT_EQ(s.bvh.order[hit.prim], uint32_t(k));
+        EXPECT_FLOAT_EQ(hit.t, 2.75f * x);
+        EXPECT_TRUE(shader::traceAny(o, d, shader::kInfinity));
+    }
+}
+
+// A ray with a zero direction component lying in the top face plane of the scene's bounds still
+// hits what touches that plane: a sphere tangentially, a wall along its top edge.
+TEST(Bvh, RayInFacePlaneOfBounds) {
+    Scene s = load({sphere(vec3(0.0f), 1.0f),
+                    triangle(vec3(3.0f, 1.0f, -1.0f), vec3(3.0f, 1.0f, 1.0f), vec3(3.0f, -1.0f, 0.0f))},
+                   1);
+    ASSERT_EQ(s.bvh.nodes[0].count, 0u);
+    Hit hit{};
+    ASSERT_TRUE(shader::traceClosest(vec3(-5.0f, 1.0f, 0.0f), vec3(1.0f, 0.0f, 0.0f), shader::kInfinity, hit));
+    EXPECT_EQ(s.bvh.order[hit.prim], 0u);
+    EXPECT_FLOAT_EQ(hit.t, 5.0f);
+    ASSERT_TRUE(shader::traceClosest(vec3(-5.0f, 1.0f, 0.25f), vec3(1.0f, 0.0f, 0.0f), shader::kInfinity, hit));
+    EXPECT_EQ(s.bvh.order[hit.prim], 1u);
+    EXPECT_FLOAT_EQ(hit.t, 8.0f);
+    EXPECT_TRUE(shader::traceAny(vec3(-5.0f, 1.0f, 0.25f), vec3(1.0f, 0.0f, 0.0f), shader::kInfinity));
+    // Along the top edge of the wall, in its plane: parallel to the triangle, no hit
+    EXPECT_FALSE(shader::traceAny(vec3(3.0f, 1.0f, -5.0f), vec3(0.0f, 0.0f, 1.0f), shader::kInfinity));
+}
+
+// SAH quality: on a 100k-triangle soup a ray enters tens of nodes, against 100k primitive tests
+// by brute force.
+TEST(Bvh, TraversalVisitsFewNodes) {
+    Random r(3);
+    std::vector<Prim> prims;
+    for (int i = 0; i < 100000; ++i) {
+        vec3 c = r.point(10.0f);
+        float s = r.logUniform(0.02f, 0.2f);
+        prims.push_back(triangle(c + s * r.direction(), c + s * r.direction(), c + s * r.direction()));
+    }
+    Scene s = load(prims, 4);
+    TreeStats stats;
+    expectValidTree(s.bvh, s.boxes, 4, stats);
+    const int rays = 2000;
+    bvh_test::nodeVisits = 0;
+    int hits = 0;
+    for (int i = 0; i < rays; ++i) {
+        Hit hit{};
+        hits += shader::traceClosest(r.point(12.0f), r.direction(), shader::kInfinity, hit);
+    }
+    double perRay = double(bvh_test::nodeVisits) / rays;
+    EXPECT_GT(hits, rays / 10);
+    EXPECT_LT(perRay, 150.0) << "of " << s.bvh.nodes.size() << " nodes";  // 58 when written
+}
+
+}  // namespace
+}  // namespace telescope

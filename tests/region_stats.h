@@ -1,0 +1,40 @@
+// Statistics over image regions for render tests (ESTIMATORS.md section 6): block means with the
+// variance of the mean taken from the estimator's own per-pixel sample variance, Z-scores against
+// an analytic value or an independent render, and a Sidak-corrected threshold.
+#pragma once
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "render/film.h"
+
+namespace telescope::test {
+
+struct RegionMean {
+    glm::dvec3 mean{0.0};
+    glm::dvec3 variance{0.0};  // variance of the mean
+};
+
+// Means of the estimate over square blocks of `block` x `block` pixels (row-major blocks).
+std::vector<RegionMean> blockMeans(const Film& film, uint32_t block, uint32_t channel = 0);
+
+// Two-sided normal quantile for a family of `tests` tests at overall false-alarm rate `alpha`.
+double sidakThreshold(double alpha, size_t tests);
+
+struct ZSummary {
+    double maxAbsZ = 0.0;
+    size_t failing = 0;   // tests above the threshold
+    size_t tests = 0;
+    std::string worst;    // description of the worst test
+};
+
+// Z = (a - b) / sqrt(var_a + var_b) per block and colour channel. Noiseless blocks must agree
+// exactly (identical black regions are skipped).
+ZSummary compareRegions(const std::vector<RegionMean>& a, const std::vector<RegionMean>& b, double threshold);
+// Against a known value per channel; a noiseless block must equal it to 1e-6.
+ZSummary compareToValue(const std::vector<RegionMean>& a, glm::dvec3 value, double threshold);
+
+}  // namespace telescope::test
