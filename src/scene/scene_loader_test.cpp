@@ -1,0 +1,520 @@
+// Scene loading: Tungsten's conventions on known scenes, overrides, and bad input.
+#include "scene/scene_loader.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include "core/error.h"
+
+namespace telescope {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr float kPi = 3.14159265358979323846f;
+constexpr const char* kFile = "test-scene.json";
+
+// ---- Fixtures and helpers ----
+
+// A scratch directory for mesh files, one per test process.
+const fs::path& scratchDir() {
+    static const fs::path dir = [] {
+        fs::path d = fs::temp_directory_path() / ("telescope-scene-test-" + std::to_string(::getpid()));
+        fs::create_directories(d);
+        return d;
+    }();
+    return dir;
+}
+
+// Removes the scratch directory after the last test.
+class ScratchCleanup : public testing::Environment {
+public:
+    void TearDown() override {
+        std::error_code ec;
+        fs::remove_all(scratchDir(), ec);
+    }
+};
+[[maybe_unused]] testing::Environment* const kScratchCleanup = testing::AddGlobalTestEnvironment(new ScratchCleanup);
+
+void writeFile(const std::string& name, const std::string& bytes) {
+    std::ofstream(scratchDir() / name, std::ios::binary) << bytes;
+}
+
+Scene load(const std::string& text, const std::vector<SceneOverride>& overrides = {}) {
+    return loadSceneFromString(text, kFile, scratchDir().string(), overrides);
+}
+
+Scene cornellBox(const std::vector<SceneOverride>& overrides = {}) {
+    return loadScene(TELESCOPE_SOURCE_DIR "/scenes/tungsten/cornell-box/scene.json", overrides);
+}
+
+std::vector<Geometry> geometryOf(const Scene& scene, const std::string& shapeName) {
+    std::vector<Geometry> out;
+    for (const Geometry& g : scene.geometry)
+        if (scene.shapes.at(g.shape).name == shapeName) out.push_back(g);
+    return out;
+}
+
+void expectVec(const glm::vec3& actual, const glm::vec3& expected, float tol = 1e-5f) {
+    EXPECT_NEAR(actual.x, expected.x, tol) << "x";
+    EXPECT_NEAR(actual.y, expected.y, tol) << "y";
+    EXPECT_NEAR(actual.z, expected.z, tol) << "z";
+}
+
+void expectRelative(const glm::vec3& actual, const glm::vec3& expected, float relTol) {
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(actual[i], expected[i], std::abs(expected[i]) * relTol) << "component " << i;
+}
+
+bool hasIgnored(const Scene& s, const std::string& key) {
+    return std::find(s.ignoredKeys.begin(), s.ignoredKeys.end(), key) != s.ignoredKeys.end();
+}
+
+// A one-primitive scene around the given primitive JSON object.
+std::string withPrimitive(const std::string& primitive) {
+    return R"({"bsdfs": [{"name": "white", "type": "lambert", "albedo": 0.5}], "primitives": [)" + primitive + "]}";
+}
+
+// ---- The Tungsten Cornell box ----
+
+TEST(SceneLoader, CornellBoxCounts) {
+    const Scene s = cornellBox();
+    EXPECT_EQ(s.geometry.size(), 36u);  // 5 walls x 2 + 2 cubes x 12 + light x 2
+    EXPECT_EQ(s.shapes.size(), 8u);
+    EXPECT_EQ(s.materials.size(), 8u);
+    EXPECT_TRUE(s.lights.empty());
+    size_t emissive = 0;
+    for (const Geometry& g : s.geometry) {
+        EXPECT_EQ(g.type, GeometryType::Triangle);
+        EXPECT_NEAR(glm::length(g.normal), 1.0f, 1e-5f);
+        EXPECT_GT(glm::dot(glm::cross(g.p1 - g.p0, g.p2 - g.p0), g.normal), 0.0f) << "winding follows the normal";
+        if (g.emission != glm::vec3(0.0f)) {
+            ++emissive;
+            expectVec(g.emission, {17, 12, 4});
+            EXPECT_EQ(s.shapes[g.shape].name, "light");
+            EXPECT_EQ(s.materials[g.material].type, BsdfType::Null);
+        }
+    }
+    EXPECT_EQ(emissive, 2u);
+}
+
+TEST(SceneLoader, CornellBoxSettings) {
+    const Scene s = cornellBox();
+    EXPECT_EQ(s.camera.width, 1000u);
+    EXPECT_EQ(s.camera.height, 563u);
+    EXPECT_FLOAT_EQ(s.camera.fovDegrees, 35.0f);
+    EXPECT_EQ(s.camera.filter, "tent");
+    expectVec(s.camera.position, {0, 1, 6.8f});
+    expectVec(s.camera.forward, {0, 0, -1});
+    expectVec(s.camera.up, {0, 1, 0});
+    expectVec(s.camera.right, {1, 0, 0});  // forward x up
+    EXPECT_EQ(s.integrator.maxBounces, 64u);
+    EXPECT_TRUE(s.integrator.enableLightSampling);
+    EXPECT_TRUE(s.integrator.enableTwoSidedShading);
+    EXPECT_EQ(s.integrator.debias.estimator, DebiasEstimator::None);
+    EXPECT_EQ(s.renderer.spp, 64u);
+    EXPECT_EQ(s.document["camera"]["fov"], 35);
+    EXPECT_NE(s.path.find("cornell-box/scene.json"), std::string::npos);
+}
+
+TEST(SceneLoader, CornellBoxIgnoredKeysAreListedOnce) {
+    const Scene s = cornellBox();
+    EXPECT_TRUE(hasIgnored(s, "camera.tonemap"));
+    EXPECT_TRUE(hasIgnored(s, "renderer.output_file"));
+    EXPECT_TRUE(hasIgnored(s, "integrator.enable_volume_light_sampling"));
+    EXPECT_FALSE(hasIgnored(s, "renderer.spp"));
+    EXPECT_EQ(std::set<std::string>(s.ignoredKeys.begin(), s.ignoredKeys.end()).size(), s.ignoredKeys.size());
+}
+
+TEST(SceneLoader, CornellFloorSpansUnitSquareFacingUp) {
+    // scale (2, 4, 2), rotation (0, 90, 0)
+    const std::vector<Geometry> floor = geometryOf(cornellBox(), "floor");
+    ASSERT_EQ(floor.size(), 2u);
+    glm::vec3 lo(1e9f), hi(-1e9f);
+    for (const Geometry& g : floor) {
+        expectVec(g.normal, {0, 1, 0});
+        for (const glm::vec3& p : {g.p0, g.p1, g.p2}) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
+    }
+    expectVec(lo, {-1, 0, -1});
+    expectVec(hi, {1, 0, 1});
+}
+
+TEST(SceneLoader, CornellWallAndLightOrientations) {
+    const Scene s = cornellBox();
+    expectVec(geometryOf(s, "light").at(0).normal, {0, -1, 0});  // rotation (0, 180, 180)
+    expectVec(geometryOf(s, "ceiling").at(0).normal, {0, -1, 0});
+    // The walls face outward; two-sided shading makes them work
+    expectVec(geometryOf(s, "leftWall").at(0).normal, {-1, 0, 0});
+    expectVec(geometryOf(s, "rightWall").at(0).normal, {1, 0, 0});
+    expectVec(geometryOf(s, "backWall").at(0).normal, {0, 0, -1});
+}
+
+TEST(SceneLoader, CornellCubesAreClosedWithOutwardNormals) {
+    const Scene s = cornellBox();
+    for (const char* name : {"shortBox", "tallBox"}) {
+        const std::vector<Geometry> box = geometryOf(s, name);
+        ASSERT_EQ(box.size(), 12u) << name;
+        glm::vec3 centre(0.0f);
+        for (const Geometry& g : box) centre += (g.p0 + g.p1 + g.p2) / 36.0f;
+        for (const Geometry& g : box) EXPECT_GT(glm::dot((g.p0 + g.p1 + g.p2) / 3.0f - centre, g.normal), 0.0f) << name;
+        float lowest = 1e9f;
+        for (const Geometry& g : box) lowest = std::min({lowest, g.p0.y, g.p1.y, g.p2.y});
+        EXPECT_NEAR(lowest, 0.0f, 1e-4f) << name << " stands on the floor";
+    }
+}
+
+// ---- The bundled scenes ----
+
+TEST(BundledScenes, CornellBoxIsTheTungstenGeometryAt256) {
+    const Scene s = loadScene(TELESCOPE_SOURCE_DIR "/scenes/cornell-box.json");
+    EXPECT_EQ(s.geometry.size(), 36u);
+    EXPECT_EQ(s.camera.width, 256u);
+    EXPECT_EQ(s.camera.height, 256u);
+    EXPECT_EQ(s.renderer.spp, 16u);
+    EXPECT_TRUE(s.ignoredKeys.empty());
+    const Scene tungsten = cornellBox();
+    for (size_t i = 0; i < s.geometry.size(); ++i) {
+        expectVec(s.geometry[i].p0, tungsten.geometry[i].p0);
+        expectVec(s.geometry[i].emission, tungsten.geometry[i].emission);
+    }
+}
+
+TEST(BundledScenes, FurnaceIsAClosedInwardEmittingBox) {
+    const Scene s = loadScene(TELESCOPE_SOURCE_DIR "/scenes/furnace.json");
+    ASSERT_EQ(s.geometry.size(), 12u);
+    EXPECT_TRUE(s.ignoredKeys.empty());
+    for (const Geometry& g : s.geometry) {
+        const glm::vec3 centroid = (g.p0 + g.p1 + g.p2) / 3.0f;
+        EXPECT_LT(glm::dot(centroid, g.normal), 0.0f) << "faces the camera at the origin";
+        expectVec(g.emission, glm::vec3(1.0f));
+        expectVec(s.materials[g.material].albedo, glm::vec3(0.5f));
+    }
+    expectVec(s.camera.position, glm::vec3(0.0f));
+}
+
+TEST(BundledScenes, PointPlane) {
+    const Scene s = loadScene(TELESCOPE_SOURCE_DIR "/scenes/point-plane.json");
+    EXPECT_TRUE(s.ignoredKeys.empty());
+    ASSERT_EQ(s.lights.size(), 1u);
+    expectRelative(s.lights[0].intensity, glm::vec3(1.0f), 1e-6f);
+    expectVec(s.lights[0].position, {0, 1, 0});
+    ASSERT_EQ(s.geometry.size(), 2u);
+    expectVec(s.geometry[0].normal, {0, 1, 0});
+    expectVec(s.camera.forward, {0, -1, 0});
+}
+
+// ---- Shapes, emission and power ----
+
+TEST(SceneLoader, PowerToRadianceOnQuad) {
+    // Tungsten's volumetric-caustic light: power (34, 24, 8) on 0.005 x 0.004
+    const Scene s = load(withPrimitive(R"({"type": "quad", "bsdf": "white", "power": [34, 24, 8],
+        "transform": {"scale": [0.005, 1, 0.004]}})"));
+    ASSERT_EQ(s.geometry.size(), 2u);
+    expectRelative(s.geometry[0].emission, {541127, 381972, 127324}, 1e-3f);
+    expectRelative(s.geometry[1].emission, {541127, 381972, 127324}, 1e-3f);
+}
+
+TEST(SceneLoader, PowerWinsOverEmission) {
+    const Scene s = load(withPrimitive(R"({"type": "quad", "bsdf": "white", "power": 3.14159265, "emission": 7})"));
+    expectRelative(s.geometry[0].emission, glm::vec3(1.0f), 1e-5f);  // unit area
+    EXPECT_TRUE(hasIgnored(s, "primitives[0].emission"));
+}
+
+TEST(SceneLoader, SphereRadiusIsTheLargestScale) {
+    const Scene s = load(withPrimitive(R"({"type": "sphere", "bsdf": "white", "power": 1,
+        "transform": {"position": [1, 2, 3], "scale": [0.1, 0.3, 0.2]}})"));
+    ASSERT_EQ(s.geometry.size(), 1u);
+    const Geometry& g = s.geometry[0];
+    EXPECT_EQ(g.type, GeometryType::Sphere);
+    expectVec(g.p0, {1, 2, 3});
+    EXPECT_FLOAT_EQ(g.radius, 0.3f);
+    expectRelative(g.emission, glm::vec3(1.0f / (kPi * 4.0f * kPi * 0.09f)), 1e-5f);
+}
+
+TEST(SceneLoader, DiskFacesLocalYWithRadiusFromXZ) {
+    const Scene s = load(withPrimitive(R"({"type": "disk", "bsdf": "white", "power": 1,
+        "transform": {"position": [0, 1, 0], "scale": [2, 5, 3], "rotation": [90, 0, 0]}})"));
+    ASSERT_EQ(s.geometry.size(), 1u);
+    const Geometry& g = s.geometry[0];
+    EXPECT_EQ(g.type, GeometryType::Disk);
+    expectVec(g.p0, {0, 1, 0});
+    expectVec(g.normal, {0, 0, 1});
+    EXPECT_FLOAT_EQ(g.radius, 3.0f);
+    expectRelative(g.emission, glm::vec3(1.0f / (kPi * kPi * 9.0f)), 1e-5f);
+}
+
+TEST(SceneLoader, CubePowerUsesTheWholeSurface) {
+    const Scene s = load(withPrimitive(R"({"type": "cube", "bsdf": "white", "power": 1,
+        "transform": {"scale": [1, 2, 3]}})"));
+    ASSERT_EQ(s.geometry.size(), 12u);
+    const float area = 2.0f * (1 * 2 + 2 * 3 + 3 * 1);
+    for (const Geometry& g : s.geometry) expectRelative(g.emission, glm::vec3(1.0f / (kPi * area)), 1e-5f);
+}
+
+TEST(SceneLoader, PointLightIntensity) {
+    const Scene s = load(R"({"primitives": [
+        {"type": "point", "name": "bulb", "power": 12.566370614, "transform": {"position": [0, 2, 0]}},
+        {"type": "point", "emission": [1, 2, 3]}]})");
+    ASSERT_EQ(s.lights.size(), 2u);
+    EXPECT_EQ(s.lights[0].type, LightType::Point);
+    EXPECT_EQ(s.lights[0].name, "bulb");
+    expectVec(s.lights[0].position, {0, 2, 0});
+    expectRelative(s.lights[0].intensity, glm::vec3(1.0f), 1e-5f);  // power / (4 pi)
+    expectVec(s.lights[1].intensity, {1, 2, 3});                   // emission is the intensity
+    EXPECT_TRUE(s.geometry.empty());
+    EXPECT_EQ(s.shapes.size(), 2u);
+}
+
+TEST(SceneLoader, ConstantEnvironment) {
+    const Scene s = load(R"({"primitives": [{"type": "infinite_sphere", "emission": 0.5, "sample": true},
+                                            {"type": "infinite_sphere", "power": 12.566370614}]})");
+    ASSERT_EQ(s.lights.size(), 2u);
+    EXPECT_EQ(s.lights[0].type, LightType::Environment);
+    expectVec(s.lights[0].intensity, glm::vec3(0.5f));
+    expectRelative(s.lights[1].intensity, glm::vec3(1.0f), 1e-5f);
+    EXPECT_TRUE(hasIgnored(s, "primitives[0].sample"));
+}
+
+TEST(SceneLoader, ObjMeshIsTransformedWithCrossProductNormals) {
+    writeFile("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 2 2\nf 1 2 3\nf 1 1 4\nf 1 3 2\n");
+    const Scene s = load(withPrimitive(R"({"type": "mesh", "file": "tri.obj", "bsdf": "white", "smooth": true,
+        "transform": {"position": [0, 0, 5]}})"));
+    ASSERT_EQ(s.geometry.size(), 2u);  // the degenerate face is skipped
+    expectVec(s.geometry[0].p0, {0, 0, 5});
+    expectVec(s.geometry[0].p1, {1, 0, 5});
+    expectVec(s.geometry[0].normal, {0, 0, 1});  // cross(p1 - p0, p2 - p0)
+    expectVec(s.geometry[1].normal, {0, 0, -1});
+    EXPECT_TRUE(hasIgnored(s, "primitives[0].smooth"));
+}
+
+TEST(SceneLoader, Wo3MeshWithPerTriangleBsdfs) {
+    // Two triangles: material 1 and material 7 (clamped to the last bsdf)
+    std::string bytes;
+    auto put = [&](const void* p, size_t n) { bytes.append(static_cast<const char*>(p), n); };
+    const uint64_t numVerts = 4, numTris = 2;
+    put(&numVerts, 8);
+    const float verts[4][8] = {{0, 0, 0, 0, 0, 1, 0, 0}, {1, 0, 0, 0, 0, 1, 1, 0}, {0, 1, 0, 0, 0, 1, 0, 1}, {1, 1, 0, 0, 0, 1, 1, 1}};
+    put(verts, sizeof(verts));
+    put(&numTris, 8);
+    const uint32_t tris[2][4] = {{0, 1, 2, 1}, {1, 3, 2, 7}};
+    put(tris, sizeof(tris));
+    writeFile("square.wo3", bytes);
+
+    const Scene s = load(R"({"bsdfs": [{"name": "a", "type": "lambert"}, {"name": "b", "type": "mirror"}],
+        "primitives": [{"type": "mesh", "file": "square.wo3", "bsdf": ["a", "b", {"type": "null"}], "power": 1}]})");
+    ASSERT_EQ(s.geometry.size(), 2u);
+    EXPECT_EQ(s.materials.size(), 3u);
+    EXPECT_EQ(s.materials[s.geometry[0].material].type, BsdfType::Mirror);
+    EXPECT_EQ(s.materials[s.geometry[1].material].type, BsdfType::Null);
+    expectRelative(s.geometry[0].emission, glm::vec3(1.0f / kPi), 1e-5f);  // total area 1
+}
+
+TEST(SceneLoader, DefaultsWithoutCameraIntegratorOrRenderer) {
+    const Scene s = load(R"({"primitives": []})");
+    EXPECT_TRUE(s.geometry.empty());
+    EXPECT_EQ(s.camera.width, 512u);
+    EXPECT_FLOAT_EQ(s.camera.fovDegrees, 60.0f);
+    expectVec(s.camera.forward, {0, 0, 1});
+    expectVec(s.camera.right, glm::cross(s.camera.forward, s.camera.up));
+    EXPECT_EQ(s.integrator.maxBounces, 64u);
+    EXPECT_EQ(s.renderer.spp, 32u);
+}
+
+TEST(SceneLoader, BsdfSharingAndDefaults) {
+    const Scene s = load(R"({"bsdfs": [{"name": "glass", "type": "dielectric"}, {"name": "unused", "type": "lambert"}],
+        "primitives": [{"type": "quad", "bsdf": "glass"}, {"type": "sphere", "bsdf": "glass"},
+                       {"type": "quad", "bsdf": {"type": "mirror", "albedo": [0.1, 0.2, 0.3], "bump": "b.png"}}]})");
+    ASSERT_EQ(s.materials.size(), 2u);  // one per bsdf used
+    EXPECT_EQ(s.geometry[0].material, s.geometry[2].material);
+    const Material& glass = s.materials[s.geometry[0].material];
+    EXPECT_EQ(glass.type, BsdfType::Dielectric);
+    EXPECT_FLOAT_EQ(glass.ior, 1.5f);
+    EXPECT_TRUE(glass.enableRefraction);
+    expectVec(glass.albedo, glm::vec3(1.0f));
+    expectVec(s.materials[s.geometry[3].material].albedo, {0.1f, 0.2f, 0.3f});
+    EXPECT_TRUE(hasIgnored(s, "primitives[2].bsdf.bump"));
+}
+
+TEST(SceneLoader, UnknownKeysAreIgnoredNotErrors) {
+    const Scene s = load(R"({"primitives": [], "version": 2, "camera": {"vignette": 1}})");
+    EXPECT_TRUE(hasIgnored(s, "version"));
+    EXPECT_TRUE(hasIgnored(s, "camera.vignette"));
+}
+
+TEST(SceneLoader, DebiasSettings) {
+    Scene s = load(R"({"integrator": {"type": "path_tracer", "min_bounces": 1, "max_bounces": 5,
+        "enable_light_sampling": false, "debias": {"estimator": "sum", "pmf": {"type": "power_law", "alpha": 0.5}}}})");
+    EXPECT_EQ(s.integrator.minBounces, 1u);
+    EXPECT_EQ(s.integrator.maxBounces, 5u);
+    EXPECT_FALSE(s.integrator.enableLightSampling);
+    EXPECT_EQ(s.integrator.debias.estimator, DebiasEstimator::Sum);
+    EXPECT_EQ(s.integrator.debias.pmf.type, PmfType::PowerLaw);
+    EXPECT_FLOAT_EQ(s.integrator.debias.pmf.alpha, 0.5f);
+
+    s = load(R"({"integrator": {"debias": {"estimator": "single_term"}}})");
+    EXPECT_EQ(s.integrator.debias.estimator, DebiasEstimator::SingleTerm);
+    EXPECT_EQ(s.integrator.debias.pmf.type, PmfType::Geometric);
+    EXPECT_FLOAT_EQ(s.integrator.debias.pmf.r, 0.65f);
+}
+
+// ---- Overrides ----
+
+TEST(SceneOverrides, ParseSplitsAtTheFirstEquals) {
+    const SceneOverride o = parseOverride("renderer.output_file=a=b.png");
+    EXPECT_EQ(o.key, "renderer.output_file");
+    EXPECT_EQ(o.value, "a=b.png");
+}
+
+TEST(SceneOverrides, AppliedBeforeInterpretation) {
+    const Scene s = cornellBox({parseOverride("camera.resolution=[64,48]"), parseOverride("integrator.max_bounces=3"),
+                                parseOverride(R"(primitives[2].bsdf={"type":"mirror"})"),
+                                parseOverride("integrator.debias.estimator=sum"),
+                                parseOverride("integrator.debias.pmf.r=0.5"),
+                                parseOverride("renderer.output_file=out.png")});
+    EXPECT_EQ(s.camera.width, 64u);
+    EXPECT_EQ(s.camera.height, 48u);
+    EXPECT_EQ(s.integrator.maxBounces, 3u);
+    EXPECT_EQ(s.materials[geometryOf(s, "backWall").at(0).material].type, BsdfType::Mirror);
+    EXPECT_EQ(s.integrator.debias.estimator, DebiasEstimator::Sum);  // bare string value
+    EXPECT_FLOAT_EQ(s.integrator.debias.pmf.r, 0.5f);
+    EXPECT_EQ(s.document["camera"]["resolution"], nlohmann::json::parse("[64,48]"));
+    EXPECT_EQ(s.document["renderer"]["output_file"], "out.png");
+}
+
+TEST(SceneOverrides, ScalarAndBooleanValues) {
+    const Scene s = load(R"({"integrator": {}})", {parseOverride("camera.resolution=128"),
+                                                    parseOverride("integrator.enable_light_sampling=false")});
+    EXPECT_EQ(s.camera.width, 128u);
+    EXPECT_EQ(s.camera.height, 128u);
+    EXPECT_FALSE(s.integrator.enableLightSampling);
+}
+
+// ---- Bad input: each error names the file and the offending key path ----
+
+struct BadInput {
+    const char* name;
+    std::string text;             // the scene
+    std::string override_;        // a --set applied to it, if any
+    std::string key;              // expected InputError::key()
+    std::string message;          // expected in what()
+    std::string file = kFile;     // expected InputError::file() ("" = command line)
+};
+
+void PrintTo(const BadInput& c, std::ostream* os) { *os << c.name; }
+
+class SceneLoaderBadInput : public testing::TestWithParam<BadInput> {};
+
+TEST_P(SceneLoaderBadInput, NamesFileAndKey) {
+    const BadInput& c = GetParam();
+    writeFile("garbage.obj", "this is not an obj\nf a b c\n");
+    writeFile("oob.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+    writeFile("short.wo3", std::string("\x05\0\0\0\0\0\0\0abc", 11));
+    try {
+        std::vector<SceneOverride> overrides;
+        if (!c.override_.empty()) overrides.push_back(parseOverride(c.override_));
+        load(c.text, overrides);
+        FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_EQ(e.file(), c.file);
+        EXPECT_EQ(e.key(), c.key);
+        EXPECT_NE(what.find(c.file.empty() ? "command line" : c.file), std::string::npos) << what;
+        EXPECT_NE(what.find(c.key), std::string::npos) << what;
+        EXPECT_NE(what.find(c.message), std::string::npos) << what;
+        if (c.file.empty()) {
+            EXPECT_NE(what.find(kFile), std::string::npos) << "names the scene: " << what;
+        }
+    }
+}
+
+const std::string kQuad = R"({"type": "quad", "bsdf": "white"})";
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, SceneLoaderBadInput,
+    testing::Values(
+        BadInput{"MalformedJson", "{\n  \"primitives\": [\n    {\"type\": }\n  ]\n}", "", "", "line 3"},
+        BadInput{"TopLevelNotObject", "[1, 2]", "", "", "top level"},
+        BadInput{"UnknownPrimitiveType", withPrimitive(R"({"type": "teapot"})"), "", "primitives[0].type", "unknown primitive type 'teapot'"},
+        BadInput{"UnsupportedPrimitiveType", withPrimitive(R"({"type": "curves"})"), "", "primitives[0].type", "unsupported primitive type 'curves'"},
+        BadInput{"UnsupportedBsdfType", R"({"bsdfs": [{"type": "plastic"}]})", "", "bsdfs[0].type", "unsupported bsdf type 'plastic'"},
+        BadInput{"UnknownBsdfType", R"({"bsdfs": [{"type": "velvet"}]})", "", "bsdfs[0].type", "unknown bsdf type 'velvet'"},
+        BadInput{"UnknownBsdfName", withPrimitive(kQuad + "," + R"({"type": "quad", "bsdf": "black"})"), "", "primitives[1].bsdf", "unknown bsdf 'black'"},
+        BadInput{"MissingBsdf", withPrimitive(R"({"type": "sphere"})"), "", "primitives[0]", "missing 'bsdf'"},
+        BadInput{"AlbedoWrongType", R"({"bsdfs": [{"type": "lambert", "albedo": true}]})", "", "bsdfs[0].albedo", "expected a number"},
+        BadInput{"AlbedoNegative", R"({"bsdfs": [{"type": "lambert", "albedo": [1, -1, 1]}]})", "", "bsdfs[0].albedo", "non-negative"},
+        BadInput{"BitmapTexture", R"({"bsdfs": [{"type": "lambert", "albedo": "wood.png"}]})", "", "bsdfs[0].albedo", "textures are not supported"},
+        BadInput{"TextureObject", R"({"bsdfs": [{"type": "lambert", "albedo": {"type": "checker"}}]})", "", "bsdfs[0].albedo", "textures are not supported"},
+        BadInput{"BitmapEmission", withPrimitive(R"({"type": "infinite_sphere", "emission": "sky.hdr"})"), "", "primitives[0].emission", "textures are not supported"},
+        BadInput{"ScaleWrongLength", withPrimitive(R"({"type": "quad", "bsdf": "white", "transform": {"scale": [1, 2]}})"), "", "primitives[0].transform.scale", "3 numbers"},
+        BadInput{"ScaleComponentString", withPrimitive(R"({"type": "quad", "bsdf": "white", "transform": {"scale": [1, "2", 3]}})"), "", "primitives[0].transform.scale[1]", "expected a number"},
+        BadInput{"MatrixWrongLength", withPrimitive(R"({"type": "quad", "bsdf": "white", "transform": [1, 0, 0]})"), "", "primitives[0].transform", "16"},
+        BadInput{"LookAtEqualsPosition", R"({"camera": {"transform": {"position": [1, 1, 1], "look_at": [1, 1, 1]}}})", "", "camera.transform.look_at", "look_at equals position"},
+        BadInput{"NumberOverflow", R"({"camera": {"fov": 1e999}})", "", "", "number overflow"},
+        BadInput{"NumberTooLargeForFloat", R"({"camera": {"fov": 1e39}})", "", "camera.fov", "too large"},
+        BadInput{"FovString", R"({"camera": {"fov": "wide"}})", "", "camera.fov", "expected a number"},
+        BadInput{"NegativeResolution", R"({"camera": {"resolution": [-64, 64]}})", "", "camera.resolution[0]", "expected an integer in [1, 16384]"},
+        BadInput{"HugeResolution", R"({"camera": {"resolution": 20000}})", "", "camera.resolution", "expected an integer in [1, 16384]"},
+        BadInput{"ResolutionWrongLength", R"({"camera": {"resolution": [1, 2, 3]}})", "", "camera.resolution", "[width, height]"},
+        BadInput{"CameraThinlens", R"({"camera": {"type": "thinlens"}})", "", "camera.type", "unsupported camera type 'thinlens'"},
+        BadInput{"UnknownFilter", R"({"camera": {"reconstruction_filter": "sinc"}})", "", "camera.reconstruction_filter", "unknown reconstruction filter"},
+        BadInput{"ZeroSpp", R"({"renderer": {"spp": 0}})", "", "renderer.spp", "expected an integer"},
+        BadInput{"FractionalSpp", R"({"renderer": {"spp": 1.5}})", "", "renderer.spp", "expected an integer"},
+        BadInput{"MaxBouncesNegative", R"({"integrator": {"max_bounces": -1}})", "", "integrator.max_bounces", "expected an integer in [0, 1024]"},
+        BadInput{"MaxBouncesString", R"({"integrator": {"max_bounces": "64"}})", "", "integrator.max_bounces", "expected an integer"},
+        BadInput{"MaxBouncesTooLarge", R"({"integrator": {"max_bounces": 5000}})", "", "integrator.max_bounces", "expected an integer in [0, 1024]"},
+        BadInput{"LightSamplingNotBool", R"({"integrator": {"enable_light_sampling": 1}})", "", "integrator.enable_light_sampling", "true or false"},
+        BadInput{"UnsupportedIntegrator", R"({"integrator": {"type": "photon_map"}})", "", "integrator.type", "unsupported integrator type 'photon_map'"},
+        BadInput{"PmfROutOfRange", R"({"integrator": {"debias": {"estimator": "sum", "pmf": {"type": "geometric", "r": 1.0}}}})", "", "integrator.debias.pmf.r", "(0, 1)"},
+        BadInput{"PmfAlphaOutOfRange", R"({"integrator": {"debias": {"estimator": "sum", "pmf": {"type": "power_law", "alpha": 0}}}})", "", "integrator.debias.pmf.alpha", "(0, 1)"},
+        BadInput{"PmfKeyOfOtherType", R"({"integrator": {"debias": {"estimator": "sum", "pmf": {"type": "geometric", "alpha": 0.5}}}})", "", "integrator.debias.pmf.alpha", "unknown key"},
+        BadInput{"UnknownPmfType", R"({"integrator": {"debias": {"estimator": "sum", "pmf": {"type": "poisson"}}}})", "", "integrator.debias.pmf.type", "unknown pmf type"},
+        BadInput{"UnknownDebiasEstimator", R"({"integrator": {"debias": {"estimator": "roulette"}}})", "", "integrator.debias.estimator", "unknown debias estimator 'roulette'"},
+        BadInput{"MissingDebiasEstimator", R"({"integrator": {"debias": {}}})", "", "integrator.debias.estimator", "missing"},
+        BadInput{"UnknownKeyInDebias", R"({"integrator": {"debias": {"estimator": "sum", "levels": 3}}})", "", "integrator.debias.levels", "unknown key 'levels'"},
+        BadInput{"MissingMeshFile", withPrimitive(R"({"type": "mesh", "bsdf": "white", "file": "nowhere.obj"})"), "", "primitives[0].file", "cannot open mesh file"},
+        BadInput{"MalformedObj", withPrimitive(R"({"type": "mesh", "bsdf": "white", "file": "garbage.obj"})"), "", "primitives[0].file", "malformed .obj"},
+        BadInput{"ObjIndexOutOfRange", withPrimitive(R"({"type": "mesh", "bsdf": "white", "file": "oob.obj"})"), "", "primitives[0].file", "uses vertex 9 of 3"},
+        BadInput{"TruncatedWo3", withPrimitive(R"({"type": "mesh", "bsdf": "white", "file": "short.wo3"})"), "", "primitives[0].file", "malformed .wo3"},
+        BadInput{"UnsupportedMeshFormat", withPrimitive(R"({"type": "mesh", "bsdf": "white", "file": "bunny.ply"})"), "", "primitives[0].file", "unsupported mesh format"},
+        BadInput{"PowerOnZeroArea", withPrimitive(R"({"type": "quad", "bsdf": "white", "power": 1, "transform": {"scale": 0}})"), "", "primitives[0].power", "zero area"},
+        BadInput{"NonEmptyMedia", R"({"media": [{"type": "homogeneous"}]})", "", "media", "participating media are not supported yet"},
+        BadInput{"MediumReference", withPrimitive(R"({"type": "sphere", "bsdf": "white", "int_medium": "fog"})"), "", "primitives[0].int_medium", "participating media"},
+        BadInput{"PrimitivesNotArray", R"({"primitives": {}})", "", "primitives", "expected an array"},
+        BadInput{"OverrideIndexOutOfRange", withPrimitive(kQuad), "primitives[5].bsdf=\"white\"", "primitives[5].bsdf", "out of range", ""},
+        BadInput{"OverrideThroughNonObject", R"({"camera": {"fov": 40}})", "camera.fov.degrees=3", "camera.fov.degrees", "not an object", ""},
+        BadInput{"OverrideBadIndex", withPrimitive(kQuad), "primitives[x].bsdf=1", "primitives[x].bsdf", "malformed", ""},
+        BadInput{"OverrideWrongValue", R"({})", "renderer.spp=lots", "renderer.spp", "expected an integer"}),
+    [](const testing::TestParamInfo<BadInput>& info) { return std::string(info.param.name); });
+
+TEST(SceneLoaderErrors, MissingSceneFile) {
+    const std::string path = (scratchDir() / "no-such-scene.json").string();
+    try {
+        loadScene(path);
+        FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+        EXPECT_EQ(e.file(), path);
+        EXPECT_NE(std::string(e.what()).find("no-such-scene.json"), std::string::npos) << e.what();
+    }
+}
+
+TEST(SceneLoaderErrors, OverrideWithoutEquals) {
+    try {
+        parseOverride("camera.resolution");
+        FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+        EXPECT_EQ(e.file(), "");
+        EXPECT_NE(std::string(e.what()).find("command line"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("camera.resolution"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(parseOverride("=3"), InputError);
+}
+
+}  // namespace
+}  // namespace telescope
