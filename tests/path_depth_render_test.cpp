@@ -82,7 +82,7 @@ TEST_F(PathDepthRender, FixedSeedIsRepeatable) {
         ++lit;
         differ += a.sums(0)[i] != c.sums(0)[i];
     }
-    EXPECT_GT(lit, a.pixelCount() / 2);
+    EXPECT_GT(lit, a.pixelCount() / 4) << "the box covers about 40% of this 4:3 frame";
     EXPECT_GT(differ, lit * 9 / 10) << "another seed should give another image";
 }
 
