@@ -1,5 +1,7 @@
 // The telescope command: exit codes, one-line messages naming the file and key, no output on bad
 // input, and the EXR it writes (channels, metadata, base + correction = estimate).
+#include <OpenImageIO/imageio.h>  // before anything that may pull in X11
+
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -7,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 
@@ -150,4 +153,119 @@ TEST_F(Cli, RenderWritesExrWithChannelsMetadataAndPreview) {
     EXPECT_NE(text.find("\"path_trace\""), std::string::npos);
     EXPECT_NE(text.find("\"dispatches\""), std::string::npos);
     EXPECT_NE(text.find("\"device\""), std::string::npos);
+}
+
+// ---- Checkpoints, resume and merge ----
+
+namespace {
+std::string readText(const std::string& path) {
+    std::ifstream in(path);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+const char* kSmall = " --set camera.resolution=[32,24] --set integrator.max_bounces=2 -q";
+}  // namespace
+
+TEST_F(Cli, ResumedRenderEqualsOneLongRender) {
+    ASSERT_EQ(run("render " + scene() + kSmall + " --spp 8 -o " + out("a.exr") + " --checkpoint " + out("a.ckpt")).exitCode, 0);
+    CommandResult r = run("render " + scene() + kSmall + " --spp 8 -o " + out("b.exr") + " --resume " + out("a.ckpt"));
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    ASSERT_EQ(run("render " + scene() + kSmall + " --spp 16 -o " + out("c.exr")).exitCode, 0);
+    RgbImage resumed = readExrChannels(out("b.exr"), {"R", "G", "B"});
+    RgbImage whole = readExrChannels(out("c.exr"), {"R", "G", "B"});
+    ASSERT_EQ(resumed.pixels.size(), whole.pixels.size());
+    double total = 0.0;
+    for (size_t i = 0; i < whole.pixels.size(); ++i) {
+        EXPECT_NEAR(resumed.pixels[i], whole.pixels[i], 1e-5f * (1.0f + std::abs(whole.pixels[i]))) << i;
+        total += whole.pixels[i];
+    }
+    EXPECT_GT(total, 0.0);
+}
+
+TEST_F(Cli, ResumeRejectsAnotherScene) {
+    ASSERT_EQ(run("render " + scene() + kSmall + " --spp 2 -o " + out("a.exr") + " --checkpoint " + out("a.ckpt")).exitCode, 0);
+    expectBadInput("render " + scene() + kSmall + " --set integrator.max_bounces=3 --spp 2 -o " + out("b.exr") +
+                       " --resume " + out("a.ckpt"),
+                   {"a.ckpt", "another scene"});
+}
+
+TEST_F(Cli, CorruptCheckpointIsBadInput) {
+    std::string bad = write("bad.ckpt", "TELESCOPE-FILM but not really");
+    expectBadInput("render " + scene() + kSmall + " --spp 2 -o " + out("b.exr") + " --resume " + bad, {"bad.ckpt"});
+}
+
+TEST_F(Cli, MergeAddsIndependentRendersAndRejectsTheSameSeed) {
+    for (const char* seed : {"1", "2"})
+        ASSERT_EQ(run("render " + scene() + kSmall + " --spp 4 --seed " + seed + " -o " + out(std::string("s") + seed + ".exr") +
+                      " --checkpoint " + out(std::string("s") + seed + ".ckpt"))
+                      .exitCode,
+                  0);
+    expectBadInput("merge " + out("s1.ckpt") + " " + out("s1.ckpt") + " -o " + out("m.exr"), {"s1.ckpt", "seed"});
+    CommandResult r = run("merge " + out("s1.ckpt") + " " + out("s2.ckpt") + " -o " + out("m.exr"));
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    RgbImage a = readExrChannels(out("s1.exr"), {"R", "G", "B"});
+    RgbImage b = readExrChannels(out("s2.exr"), {"R", "G", "B"});
+    RgbImage m = readExrChannels(out("m.exr"), {"R", "G", "B"});
+    for (size_t i = 0; i < m.pixels.size(); ++i)
+        EXPECT_NEAR(m.pixels[i], 0.5f * (a.pixels[i] + b.pixels[i]), 1e-5f * (1.0f + std::abs(m.pixels[i]))) << i;
+}
+
+// ---- reference and converge ----
+
+TEST_F(Cli, ReferenceResumesFromItsCheckpoint) {
+    std::string args = "reference " + scene() + kSmall + " --spp 8 -o " + out("ref.exr");
+    ASSERT_EQ(run(args).exitCode, 0);
+    ASSERT_TRUE(fs::exists(out("ref.exr.checkpoint")));
+    CommandResult r = run(args);
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    RgbImage img = readExrChannels(out("ref.exr"), {"R"});
+    EXPECT_EQ(img.width, 32);
+    auto in = OIIO::ImageInput::open(out("ref.exr"));
+    ASSERT_TRUE(in);
+    EXPECT_EQ(in->spec().get_string_attribute("telescope:spp"), "16") << "the second run adds 8 spp to the first 8";
+    EXPECT_NE(in->spec().get_string_attribute("telescope:estimator").find("sum"), std::string::npos)
+        << "a biased scene gets an unbiased estimator for its reference";
+}
+
+TEST_F(Cli, ConvergeShowsTheBiasOfTruncationAndNotOfTheDebiasedEstimator) {
+    ASSERT_EQ(run("reference " + scene() + " --set camera.resolution=[32,24] -q --spp 128 -o " + out("ref.exr")).exitCode, 0);
+    CommandResult r = run("converge " + scene() + " --set camera.resolution=[32,24] -q --reference " + out("ref.exr") +
+                          " --methods biased:1,sum:1 --method 'deep: integrator.max_bounces=64' --spp 8,32 -o " +
+                          out("conv"));
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    for (const char* f : {"convergence.csv", "convergence.png", "convergence.gp", "strip.png", "report.md"})
+        EXPECT_TRUE(fs::exists(dir_ / "conv" / f)) << f;
+    // Rows: method, slice, spp, wall, gpu, rmse, rel_mse, mean_error, rel_mean_error.
+    std::istringstream csv(readText(out("conv/convergence.csv")));
+    std::string line;
+    std::getline(csv, line);
+    std::map<std::string, double> finalBias;
+    int rows = 0;
+    while (std::getline(csv, line)) {
+        ++rows;
+        std::vector<std::string> cells;
+        std::stringstream ls(line);
+        for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
+        ASSERT_EQ(cells.size(), 9u) << line;
+        finalBias[cells[0]] = std::stod(cells[8]);
+        EXPECT_GT(std::stod(cells[6]), 0.0) << line;
+    }
+    EXPECT_EQ(rows, 6);
+    // Truncating at one bounce loses about a quarter of the light; the debiased estimator and the
+    // deep render agree with the reference to within their noise.
+    EXPECT_LT(finalBias["\"biased:1\""], -0.15);
+    EXPECT_LT(std::abs(finalBias["\"sum:1\""]), 0.05);
+    EXPECT_LT(std::abs(finalBias["\"deep\""]), 0.05);
+    EXPECT_NE(readText(out("conv/report.md")).find("| biased:1 |"), std::string::npos);
+}
+
+TEST_F(Cli, ConvergeRejectsAReferenceOfAnotherSize) {
+    ASSERT_EQ(run("render " + scene() + kSmall + " --spp 1 --no-png -o " + out("ref.exr")).exitCode, 0);
+    expectBadInput("converge " + scene() + " --set camera.resolution=[16,16] --reference " + out("ref.exr") +
+                       " --methods biased:1 --spp 1 -o " + out("conv"),
+                   {"ref.exr", "32x24"});
+}
+
+TEST_F(Cli, ConvergeRejectsAnUnknownPreset) {
+    expectBadInput("converge " + scene() + " --reference " + out("ref.exr") + " --methods magic:3 --spp 1 -o " + out("conv"),
+                   {"--methods", "magic"});
 }

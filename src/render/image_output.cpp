@@ -74,14 +74,22 @@ void writeExr(const std::string& path, const Film& film, const ImageMetadata& me
     writeImage(path, spec, OIIO::TypeDesc::FLOAT, data.data());
 }
 
+void writeSrgbPng(const std::string& path, int width, int height, const std::vector<float>& rgb) {
+    if (width <= 0 || height <= 0 || rgb.size() != size_t(width) * size_t(height) * 3)
+        throw std::invalid_argument(fmt::format("{}: {} floats is not a {}x{} RGB image", path, rgb.size(), width, height));
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    std::vector<uint8_t> data(rgb.size());
+    for (size_t i = 0; i < rgb.size(); ++i) data[i] = uint8_t(std::lround(255.0f * srgbEncode(rgb[i])));
+    writeImage(path, spec, OIIO::TypeDesc::UINT8, data.data());
+}
+
 void writePngPreview(const std::string& path, const Film& film) {
-    OIIO::ImageSpec spec(int(film.width()), int(film.height()), 3, OIIO::TypeDesc::UINT8);
-    std::vector<uint8_t> data(film.pixelCount() * 3);
+    std::vector<float> rgb(film.pixelCount() * 3);
     for (size_t i = 0; i < film.pixelCount(); ++i) {
         glm::dvec3 est = film.mean(shader::kChannelEstimate, i);
-        for (int c = 0; c < 3; ++c) data[i * 3 + c] = uint8_t(std::lround(255.0f * srgbEncode(float(est[c]))));
+        for (int c = 0; c < 3; ++c) rgb[i * 3 + c] = float(est[c]);
     }
-    writeImage(path, spec, OIIO::TypeDesc::UINT8, data.data());
+    writeSrgbPng(path, int(film.width()), int(film.height()), rgb);
 }
 
 RgbImage readExrChannels(const std::string& path, const std::vector<std::string>& channels) {

@@ -19,6 +19,9 @@ void writeExr(const std::string& path, const Film& film, const ImageMetadata& me
 // sRGB preview of the estimate; negative and >1 values are clipped for display only.
 void writePngPreview(const std::string& path, const Film& film);
 
+// Linear RGB floats (row-major) to an 8-bit sRGB PNG, clipped to [0, 1] for display only.
+void writeSrgbPng(const std::string& path, int width, int height, const std::vector<float>& rgb);
+
 // Reads back the RGB estimate of an EXR written by writeExr (tests and tools).
 struct RgbImage {
     int width = 0, height = 0;

@@ -57,6 +57,10 @@ public:
 
     const RenderPlan& plan() const { return plan_; }
     void render(const RenderRequest& request);
+    // Continues a render from a checkpointed film of this scene and seed: later samples continue
+    // the same random sequence, so stopping and resuming equals one long render. Only before the
+    // first render() call.
+    void resume(const Film& film);
     Film film() const;  // downloads the accumulation
     const RenderStats& stats() const { return stats_; }
     uint32_t seed() const { return seed_; }

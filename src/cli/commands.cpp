@@ -1,0 +1,357 @@
+#include <OpenImageIO/imageio.h>  // before anything that may pull in X11
+
+#include "cli/commands.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "core/error.h"
+#include "gpu/context.h"
+#include "render/film_io.h"
+#include "render/image_output.h"
+#include "render/renderer.h"
+#include "scene/scene_loader.h"
+#include "study/converge.h"
+#include "study/reference.h"
+
+namespace fs = std::filesystem;
+
+namespace telescope::cli {
+
+namespace {
+
+Scene loadWithOverrides(const CommonOptions& o, const std::vector<SceneOverride>& extra = {}) {
+    std::vector<SceneOverride> overrides;
+    for (const auto& s : o.sets) overrides.push_back(parseOverride(s));
+    overrides.insert(overrides.end(), extra.begin(), extra.end());
+    return loadScene(o.scenePath, overrides);
+}
+
+void reportIgnoredKeys(const Scene& scene, bool quiet) {
+    if (quiet) return;
+    for (const auto& key : scene.ignoredKeys)
+        fmt::print(stderr, "{}: ignoring '{}' (not used by Telescope)\n", scene.path, key);
+}
+
+gpu::ContextOptions contextOptions(const CommonOptions& o) {
+    gpu::ContextOptions c;
+    c.deviceIndex = o.device;
+    c.validation = o.validation;
+    return c;
+}
+
+// ---- Progress: a bar on a terminal, a plain line every ~10% otherwise ----
+class ProgressReporter {
+public:
+    ProgressReporter(bool quiet, const char* what) : quiet_(quiet), tty_(isatty(fileno(stderr))), what_(what) {}
+
+    void operator()(const RenderProgress& p) {
+        if (quiet_) return;
+        double fraction = p.samplesTarget ? double(p.samplesDone) / double(p.samplesTarget)
+                                          : (p.timeLimit > 0 ? p.seconds / p.timeLimit : 0.0);
+        fraction = std::min(fraction, 1.0);
+        double eta = fraction > 0 ? p.seconds * (1.0 - fraction) / fraction : 0.0;
+        std::string line = fmt::format("{:>3.0f}% {} spp  {:.2f} Mpaths/s  {:.1f} s  ETA {:.1f} s", 100 * fraction,
+                                       p.samplesDone, p.pathsPerSecond * 1e-6, p.seconds, eta);
+        if (tty_) {
+            int width = 30, filled = int(fraction * width);
+            fmt::print(stderr, "\r[{}{}] {}", std::string(filled, '#'), std::string(width - filled, ' '), line);
+            std::fflush(stderr);
+            printedBar_ = true;
+        } else if (fraction >= nextReport_ || fraction >= 1.0) {
+            fmt::print(stderr, "{}: {}\n", what_, line);
+            while (nextReport_ <= fraction) nextReport_ += 0.1;
+        }
+    }
+    void finish() {
+        if (printedBar_) fmt::print(stderr, "\n");
+        printedBar_ = false;
+    }
+
+private:
+    bool quiet_, tty_;
+    const char* what_;
+    bool printedBar_ = false;
+    double nextReport_ = 0.1;
+};
+
+// ---- Output paths are checked before any work is done ----
+void checkOutputPath(const std::string& path, const char* option, const char* extension) {
+    fs::path p(path);
+    if (extension && p.extension() != extension)
+        throw InputError("", option, fmt::format("'{}' must end in {}", path, extension));
+    fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+    if (!fs::is_directory(dir))
+        throw InputError("", option, fmt::format("directory '{}' does not exist", dir.string()));
+}
+
+void checkImageOutputs(ImageOutputOptions& o) {
+    checkOutputPath(o.exrPath, "-o", ".exr");
+    if (!o.noPng) {
+        if (o.pngPath.empty()) o.pngPath = fs::path(o.exrPath).replace_extension(".png").string();
+        checkOutputPath(o.pngPath, "--png", ".png");
+    }
+    if (!o.checkpointPath.empty()) checkOutputPath(o.checkpointPath, "--checkpoint", nullptr);
+}
+
+void checkValidation(const gpu::Context& context) {
+    if (context.validationMessageCount() > 0)
+        throw std::runtime_error(
+            fmt::format("{} Vulkan validation message(s) were reported", context.validationMessageCount()));
+}
+
+struct OutputInfo {
+    std::string sceneFile, sceneDocument, estimator, device;
+    uint32_t seed = 0;
+    double seconds = 0.0;
+};
+
+void writeImages(const ImageOutputOptions& o, const Film& film, const OutputInfo& info) {
+    ImageMetadata meta;
+    meta.entries = {
+        {"telescope:version", TELESCOPE_VERSION},
+        {"telescope:scene_file", info.sceneFile},
+        {"telescope:scene", info.sceneDocument},
+        {"telescope:estimator", info.estimator},
+        {"telescope:seed", std::to_string(info.seed)},
+        {"telescope:spp", std::to_string(film.samplesPerPixel())},
+        {"telescope:render_seconds", fmt::format("{:.6f}", info.seconds)},
+        {"telescope:device", info.device},
+        {"telescope:non_finite_samples", std::to_string(film.nonFiniteSamples())},
+    };
+    writeExr(o.exrPath, film, meta);
+    if (!o.noPng) writePngPreview(o.pngPath, film);
+    if (!o.checkpointPath.empty())
+        saveCheckpoint(o.checkpointPath, Checkpoint{film, info.seed, info.sceneDocument, info.estimator});
+}
+
+// A checkpoint must belong to this scene (after overrides) and seed.
+void checkResumable(const Checkpoint& c, const std::string& path, const Scene& scene, uint32_t seed) {
+    if (c.scene != scene.document.dump())
+        throw InputError(path, "", fmt::format("checkpoint belongs to another scene or other --set overrides than {}",
+                                               scene.path));
+    if (c.seed != seed)
+        throw InputError(path, "", fmt::format("checkpoint was rendered with seed {}, not {}", c.seed, seed));
+}
+
+void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Context& context, const Renderer& renderer,
+                    const Film& film) {
+    const RenderStats& stats = renderer.stats();
+    const double paths = double(film.samplesPerPixel()) * double(film.pixelCount());
+    nlohmann::json j;
+    j["scene"] = scene.path;
+    j["device"] = context.info().name;
+    j["seed"] = renderer.seed();
+    j["spp"] = film.samplesPerPixel();
+    j["resolution"] = {film.width(), film.height()};
+    j["wall_seconds"] = stats.wallSeconds;
+    j["setup_seconds"] = stats.setupSeconds;
+    j["submits"] = stats.submits;
+    j["paths_per_second"] = stats.wallSeconds > 0 ? paths / stats.wallSeconds : 0.0;
+    j["non_finite_samples"] = film.nonFiniteSamples();
+    j["validation_messages"] = context.validationMessageCount();
+    j["estimator"] = renderer.plan().estimator;
+    for (const auto& [name, p] : stats.passes) j["passes"][name] = {{"dispatches", p.dispatches}, {"gpu_ms", p.gpuMs}};
+    std::string tmp = path + ".partial";
+    {
+        std::ofstream f(tmp);
+        f << j.dump(2) << "\n";
+        if (!f.flush()) throw std::runtime_error(fmt::format("{}: write failed", path));
+    }
+    fs::rename(tmp, path);
+}
+
+}  // namespace
+
+int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
+    RenderOptions o = optionsIn;
+    Scene scene = loadWithOverrides(common);
+    checkImageOutputs(o.output);
+    if (!o.statsPath.empty()) checkOutputPath(o.statsPath, "--stats-json", ".json");
+    std::optional<Checkpoint> resume;
+    if (!o.resumePath.empty()) {
+        resume = loadCheckpoint(o.resumePath);
+        if (!o.seedGiven) o.seed = resume->seed;
+        checkResumable(*resume, o.resumePath, scene, o.seed);
+    }
+    reportIgnoredKeys(scene, common.quiet);
+
+    gpu::Context context(contextOptions(common));
+    Renderer renderer(context, scene, o.seed);
+    if (resume) renderer.resume(resume->film);
+
+    RenderRequest request;
+    request.timeLimit = o.timeLimit;
+    request.spp = o.timeLimit > 0 ? 0 : (o.spp ? o.spp : scene.renderer.spp);
+    ProgressReporter progress(common.quiet, "render");
+    request.progress = [&](const RenderProgress& p) { progress(p); };
+    renderer.render(request);
+    progress.finish();
+    checkValidation(context);
+
+    Film film = renderer.film();
+    const RenderStats& stats = renderer.stats();
+    writeImages(o.output, film,
+                {scene.path, scene.document.dump(), renderer.plan().estimator, context.info().name, o.seed,
+                 stats.wallSeconds});
+    if (!o.statsPath.empty()) writeStatsJson(o.statsPath, scene, context, renderer, film);
+    if (!common.quiet) {
+        const double paths = double(stats.samplesPerPixel - (resume ? resume->film.samplesPerPixel() : 0)) *
+                             double(film.pixelCount());
+        fmt::print(stderr, "wrote {} ({}x{}, {} spp, {:.2f} s, {:.2f} Mpaths/s on {})\n", o.output.exrPath,
+                   film.width(), film.height(), film.samplesPerPixel(), stats.wallSeconds,
+                   stats.wallSeconds > 0 ? paths / stats.wallSeconds * 1e-6 : 0.0, context.info().name);
+    }
+    return 0;
+}
+
+int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn) {
+    ReferenceOptions o = optionsIn;
+    if (o.output.checkpointPath.empty()) o.output.checkpointPath = o.output.exrPath + ".checkpoint";
+    Scene asGiven = loadWithOverrides(common);
+    UnbiasedSetup setup = unbiasedSetup(asGiven);
+    Scene scene = loadWithOverrides(common, setup.overrides);
+    checkImageOutputs(o.output);
+    std::optional<Checkpoint> resume;
+    if (fs::exists(o.output.checkpointPath)) {
+        resume = loadCheckpoint(o.output.checkpointPath);
+        checkResumable(*resume, o.output.checkpointPath, scene, o.seed);
+    }
+    reportIgnoredKeys(scene, common.quiet);
+    if (!common.quiet) {
+        fmt::print(stderr, "reference: {}\n", setup.why);
+        if (resume)
+            fmt::print(stderr, "reference: resuming from {} ({} spp)\n", o.output.checkpointPath,
+                       resume->film.samplesPerPixel());
+    }
+
+    gpu::Context context(contextOptions(common));
+    Renderer renderer(context, scene, o.seed);
+    if (resume) renderer.resume(resume->film);
+    const OutputInfo info{scene.path, scene.document.dump(), renderer.plan().estimator, context.info().name, o.seed, 0.0};
+    const uint64_t startSpp = resume ? resume->film.samplesPerPixel() : 0;
+    const uint64_t targetSpp = o.timeLimit > 0 ? 0 : (o.spp ? o.spp : scene.renderer.spp);
+
+    // Render in pieces, checkpointing after each, so an interrupted reference loses one piece.
+    ProgressReporter progress(common.quiet, "reference");
+    double elapsed = 0.0;
+    while (true) {
+        RenderRequest request;
+        const uint64_t added = renderer.stats().samplesPerPixel - startSpp;
+        if (o.timeLimit > 0) {
+            if (elapsed >= o.timeLimit) break;
+            request.timeLimit = std::min(o.checkpointInterval, o.timeLimit - elapsed);
+        } else {
+            if (added >= targetSpp) break;
+            request.spp = targetSpp - added;
+            request.timeLimit = 0.0;
+        }
+        const double before = renderer.stats().wallSeconds;
+        request.progress = [&](const RenderProgress& p) {
+            RenderProgress q = p;
+            q.seconds += elapsed;
+            q.timeLimit = o.timeLimit;
+            q.samplesDone = renderer.stats().samplesPerPixel - startSpp + p.samplesDone;
+            q.samplesTarget = targetSpp;
+            progress(q);
+        };
+        if (o.timeLimit <= 0) {
+            // Pieces of about checkpointInterval seconds, sized from the speed so far.
+            const double perSample = added > 0 ? before / double(added) : 0.0;
+            if (perSample > 0.0)
+                request.spp = std::min<uint64_t>(request.spp, std::max<uint64_t>(1, uint64_t(o.checkpointInterval / perSample)));
+        }
+        renderer.render(request);
+        elapsed += renderer.stats().wallSeconds - before;
+        checkValidation(context);
+        saveCheckpoint(o.output.checkpointPath, Checkpoint{renderer.film(), o.seed, info.sceneDocument, info.estimator});
+    }
+    progress.finish();
+    Film film = renderer.film();
+    OutputInfo done = info;
+    done.seconds = renderer.stats().wallSeconds;
+    writeImages(o.output, film, done);
+    if (!common.quiet)
+        fmt::print(stderr, "wrote {} ({} spp, {} non-finite samples; checkpoint {})\n", o.output.exrPath,
+                   film.samplesPerPixel(), film.nonFiniteSamples(), o.output.checkpointPath);
+    return 0;
+}
+
+int runMerge(const MergeOptions& optionsIn) {
+    MergeOptions o = optionsIn;
+    if (o.inputs.size() < 2) throw InputError("", "inputs", "merge needs at least two checkpoints");
+    checkImageOutputs(o.output);
+    std::vector<Checkpoint> parts;
+    for (const auto& path : o.inputs) {
+        parts.push_back(loadCheckpoint(path));
+        const Checkpoint& c = parts.back();
+        if (c.scene != parts.front().scene)
+            throw InputError(path, "", fmt::format("renders another scene than {}", o.inputs.front()));
+        if (c.film.width() != parts.front().film.width() || c.film.height() != parts.front().film.height())
+            throw InputError(path, "", "has another image size");
+        for (size_t i = 0; i + 1 < parts.size(); ++i)
+            if (parts[i].seed == c.seed)
+                throw InputError(path, "", fmt::format("has the same seed ({}) as {}: its samples are not independent",
+                                                       c.seed, o.inputs[i]));
+    }
+    Film film = parts.front().film;
+    for (size_t i = 1; i < parts.size(); ++i) film.merge(parts[i].film);
+    nlohmann::json doc = nlohmann::json::parse(parts.front().scene, nullptr, false);
+    std::string seeds;
+    for (const auto& p : parts) seeds += (seeds.empty() ? "" : ",") + std::to_string(p.seed);
+    OutputInfo info{"merged", parts.front().scene, parts.front().estimator, "merged", parts.front().seed, 0.0};
+    writeImages(o.output, film, info);
+    if (!o.quiet)
+        fmt::print(stderr, "wrote {} ({} spp from {} renders, seeds {})\n", o.output.exrPath, film.samplesPerPixel(),
+                   parts.size(), seeds);
+    return 0;
+}
+
+int runConverge(const CommonOptions& common, const ConvergeOptionsCli& c) {
+    ConvergeOptions o;
+    o.scenePath = common.scenePath;
+    for (const auto& s : common.sets) o.sets.push_back(parseOverride(s));
+    o.referencePath = c.referencePath;
+    for (const auto& p : c.presets) o.methods.push_back(parseMethod(p, "--methods"));
+    for (const auto& m : c.custom) o.methods.push_back(parseMethod(m, "--method"));
+    o.timeBudget = c.timeBudget;
+    o.slices = c.slices;
+    o.sppList = c.sppList;
+    o.seed = c.seed;
+    o.outDir = c.outDir;
+    if (!common.quiet) o.log = [](const std::string& line) { fmt::print(stderr, "converge: {}\n", line); };
+
+    gpu::Context context(contextOptions(common));
+    ConvergeReport report = runConverge(context, o);
+    checkValidation(context);
+    if (!common.quiet)
+        for (const auto& f : report.files) fmt::print(stderr, "wrote {}\n", f);
+    return 0;
+}
+
+int runPlan(const CommonOptions& common) {
+    Scene scene = loadWithOverrides(common);
+    GpuScene gpuScene = buildGpuScene(scene);
+    fmt::print("{}", describePlan(scene, makeRenderPlan(scene, gpuScene.features)));
+    return 0;
+}
+
+int runDevices() {
+    auto devices = gpu::Context::listDevices();
+    if (devices.empty()) fmt::print("no Vulkan devices\n");
+    for (const auto& d : devices)
+        fmt::print("{}: {} ({}, Vulkan {}.{}, {}){}\n", d.index, d.name, d.type, VK_API_VERSION_MAJOR(d.apiVersion),
+                   VK_API_VERSION_MINOR(d.apiVersion), d.driver, d.suitable ? "" : " - unsuitable: " + d.whyNot);
+    return 0;
+}
+
+}  // namespace telescope::cli

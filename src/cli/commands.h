@@ -1,0 +1,70 @@
+// The telescope subcommands. main.cpp parses the command line into these option structs;
+// each run* function returns the process exit code and throws InputError for bad input.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace telescope::cli {
+
+constexpr uint32_t kDefaultSeed = 0xBA5EBA11u;  // Tungsten's default seed
+
+struct CommonOptions {
+    std::string scenePath;
+    std::vector<std::string> sets;
+    int device = -1;
+    bool validation = false;
+    bool quiet = false;
+};
+
+struct ImageOutputOptions {
+    std::string exrPath;
+    std::string pngPath;  // default: the EXR path with .png
+    bool noPng = false;
+    std::string checkpointPath;  // written at the end (and during long renders) when not empty
+};
+
+struct RenderOptions {
+    ImageOutputOptions output;
+    uint64_t spp = 0;        // 0: the scene's renderer.spp
+    double timeLimit = 0.0;  // seconds, instead of spp
+    uint32_t seed = kDefaultSeed;
+    bool seedGiven = false;  // with --resume the checkpoint's seed is used unless --seed says otherwise
+    std::string statsPath;
+    std::string resumePath;  // a checkpoint to continue
+};
+
+struct ReferenceOptions {
+    ImageOutputOptions output;  // checkpoint defaults to OUT.exr.checkpoint
+    uint64_t spp = 0;
+    double timeLimit = 0.0;
+    uint32_t seed = kDefaultSeed;
+    double checkpointInterval = 30.0;  // seconds between checkpoints
+};
+
+struct MergeOptions {
+    std::vector<std::string> inputs;  // checkpoints
+    ImageOutputOptions output;
+    bool quiet = false;
+};
+
+struct ConvergeOptionsCli {
+    std::string referencePath;
+    std::vector<std::string> presets;  // --methods A,B
+    std::vector<std::string> custom;   // --method 'LABEL: key=value; ...'
+    double timeBudget = 0.0;
+    uint32_t slices = 8;
+    std::vector<uint64_t> sppList;
+    uint32_t seed = 1;
+    std::string outDir;
+};
+
+int runRender(const CommonOptions& common, const RenderOptions& options);
+int runReference(const CommonOptions& common, const ReferenceOptions& options);
+int runMerge(const MergeOptions& options);
+int runConverge(const CommonOptions& common, const ConvergeOptionsCli& options);
+int runPlan(const CommonOptions& common);
+int runDevices();
+
+}  // namespace telescope::cli
