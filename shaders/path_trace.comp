@@ -27,6 +27,7 @@ layout(constant_id = kSpecFilter) const uint kFilter = kFilterTent;
 layout(constant_id = kSpecEnvironmentLight) const uint kEnvironmentLight = 0xffffffffu;
 layout(constant_id = kSpecMaxTraceDepth) const uint kMaxTraceDepth = 4096u;
 layout(constant_id = kSpecRayEpsilon) const float kRayEpsilon = 1e-5;
+layout(constant_id = kSpecPilot) const bool kPilot = false;
 
 layout(std430, binding = kBindingPrims) readonly buffer PrimBuffer { Prim prims[]; };
 layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[]; };
@@ -52,7 +53,8 @@ PathState startSample(uvec2 pixel, uint pixelIndex, uint s, LevelPmf pmf, out Rn
                       float(pc.height) / w - 2.0 * (float(pixel.y) + jitter.y) / w, pc.planeDistance);
     vec3 dir = normalize(pc.cameraRight * local.x + pc.cameraUp * local.y + pc.cameraForward * local.z);
     uint level = 0u;
-    if (kDebiasMode != kDebiasNone) level = levelSample(pmf, rngNext(rng));
+    if (kPilot) level = pc.pilotLevel;
+    else if (kDebiasMode != kDebiasNone) level = levelSample(pmf, rngNext(rng));
     return beginPath(pc.cameraPosition, dir, level);
 }
 

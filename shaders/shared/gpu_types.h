@@ -89,6 +89,7 @@ CONST uint kSpecFilter = 12u;
 CONST uint kSpecEnvironmentLight = 13u;  // light index, or 0xffffffff for none
 CONST uint kSpecMaxTraceDepth = 14u;
 CONST uint kSpecRayEpsilon = 15u;        // absolute ray offset, from the scene size
+CONST uint kSpecPilot = 16u;             // pmf pilot: every sample takes the level pc.pilotLevel
 
 CONST uint kFilterBox = 0u;
 CONST uint kFilterTent = 1u;
@@ -104,6 +105,8 @@ struct PathTracePush {
     uint sampleBase;    // global index of the first sample of this dispatch
     uint sampleCount;   // samples per pixel in this dispatch
     uint accumAddressLo; uint accumAddressHi;  // device address of the accumulation buffer
+    uint pilotLevel;    // pmf pilot only (kSpecPilot): the fixed level m = j - k
+    uint pad0; uint pad1; uint pad2;
 };
 
 // Accumulation: per pixel and channel a compensated sum (hi, lo) of vec4.
@@ -116,7 +119,7 @@ CONST uint kChannelCount = 4u;
 
 SHADER_NAMESPACE_END
 #ifdef __cplusplus
-static_assert(sizeof(telescope::shader::PathTracePush) == 80);
+static_assert(sizeof(telescope::shader::PathTracePush) == 96);
 #endif
 
 #endif

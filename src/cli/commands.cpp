@@ -21,6 +21,7 @@
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "study/converge.h"
+#include "study/pmf_pilot.h"
 #include "study/reference.h"
 
 namespace fs = std::filesystem;
@@ -179,6 +180,9 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
     if (!o.statsPath.empty()) checkOutputPath(o.statsPath, "--stats-json", ".json");
     std::optional<Checkpoint> resume;
     if (!o.resumePath.empty()) {
+        if (scene.integrator.debias.estimator != DebiasEstimator::None && scene.integrator.debias.pmf.type == PmfType::Auto)
+            throw InputError(scene.path, "integrator.debias.pmf.type",
+                             "a render with pmf \"auto\" cannot be resumed: put the pmf its pilot chose in the scene");
         resume = loadCheckpoint(o.resumePath);
         if (!o.seedGiven) o.seed = resume->seed;
         checkResumable(*resume, o.resumePath, scene, o.seed);
@@ -186,6 +190,8 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
     reportIgnoredKeys(scene, common.quiet);
 
     gpu::Context context(contextOptions(common));
+    PmfPilotResult pilot;
+    if (resolveAutoPmf(context, scene, o.seed, &pilot) && !common.quiet) fmt::print(stderr, "{}", pilot.summary());
     Renderer renderer(context, scene, o.seed);
     if (resume) renderer.resume(resume->film);
 

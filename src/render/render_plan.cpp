@@ -9,6 +9,7 @@
 namespace telescope {
 
 std::string pmfDescription(const PmfSettings& pmf) {
+    if (pmf.type == PmfType::Auto) return "auto pmf (pilot)";
     if (pmf.type == PmfType::Geometric) return fmt::format("geometric pmf, r = {:g}", pmf.r);
     return fmt::format("power-law pmf, alpha = {:g}", pmf.alpha);
 }
@@ -26,7 +27,16 @@ RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
     plan.skipped.push_back({"ray_march", "the scene has no participating media"});
 
     // ---- Estimator ----
-    if (in.debias.estimator == DebiasEstimator::None) {
+    if (in.debias.estimator != DebiasEstimator::None && in.debias.pmf.type == PmfType::Auto)
+        plan.passes.insert(plan.passes.begin(),
+                           {"pmf_pilot", "path_trace",
+                            fmt::format("pmf 'auto': before the render, {} spp at each of {} fixed levels measure the "
+                                        "second moment and cost of the correction",
+                                        in.debias.pmf.pilotSpp, in.debias.pmf.pilotLevels)});
+    if (in.pilotLevel != kNoPilotLevel) {
+        plan.estimator = fmt::format("pmf pilot: unweighted correction D_j at level j = k + {}, k = {}", in.pilotLevel,
+                                     in.maxBounces);
+    } else if (in.debias.estimator == DebiasEstimator::None) {
         plan.estimator = fmt::format("biased path tracing I(k), k = max_bounces = {}", in.maxBounces);
     } else {
         plan.estimator = fmt::format(
@@ -69,6 +79,7 @@ RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
         {kSpecEnvironmentLight, f.environmentLight},
         {kSpecMaxTraceDepth, std::max(maxTraceDepth, in.maxBounces + 1)},
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
+        {kSpecPilot, in.pilotLevel != kNoPilotLevel},
     };
     return plan;
 }

@@ -18,6 +18,8 @@ constexpr uint32_t kMaxDispatchesPerBatch = 64;
 Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
     : context_(context), scene_(scene), seed_(seed) {
     auto start = Clock::now();
+    if (scene.integrator.debias.estimator != DebiasEstimator::None && scene.integrator.debias.pmf.type == PmfType::Auto)
+        throw std::logic_error("the auto pmf must be resolved by a pilot (resolveAutoPmf) before rendering");
     gpuScene_ = buildGpuScene(scene);
     plan_ = makeRenderPlan(scene, gpuScene_.features);
 
@@ -78,6 +80,7 @@ void Renderer::render(const RenderRequest& request) {
     push.width = cam.width;
     push.height = cam.height;
     push.seed = seed_;
+    push.pilotLevel = scene_.integrator.pilotLevel;
     push.accumAddressLo = uint32_t(accum_.address());
     push.accumAddressHi = uint32_t(accum_.address() >> 32);
     const uint32_t groupsX = (cam.width + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;

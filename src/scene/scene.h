@@ -60,14 +60,20 @@ struct Camera {
 };
 
 // Settings of the debiasing telescope (ESTIMATORS.md section 1-2).
-enum class PmfType : uint32_t { Geometric = 0, PowerLaw = 1 };
+// Auto: chosen by a pilot render before the render proper (src/study/pmf_pilot.h); the shaders
+// only ever see Geometric or PowerLaw.
+enum class PmfType : uint32_t { Geometric = 0, PowerLaw = 1, Auto = 2 };
 enum class DebiasEstimator : uint32_t { None = 0, SingleTerm = 1, Sum = 2 };
 
 struct PmfSettings {
     PmfType type = PmfType::Geometric;
     float r = 0.65f;      // geometric: p(m) = r (1-r)^m
     float alpha = 2.0f / 3.0f;  // power law: P(N >= m) = (m+1)^(alpha-1)
+    uint32_t pilotSpp = 4;      // auto: samples per pixel of each pilot level
+    uint32_t pilotLevels = 8;   // auto: levels measured by the pilot (the tail is fitted)
 };
+
+constexpr uint32_t kNoPilotLevel = 0xffffffffu;
 
 struct DebiasSettings {
     DebiasEstimator estimator = DebiasEstimator::None;
@@ -83,6 +89,9 @@ struct IntegratorSettings {
     bool enableLightSampling = true;
     bool enableTwoSidedShading = true;
     DebiasSettings debias;
+    // Set by the pmf pilot only (not a scene key): every sample takes this level and records the
+    // unweighted correction D_j instead of its estimate, with no base.
+    uint32_t pilotLevel = kNoPilotLevel;
 };
 
 struct RendererSettings {

@@ -759,8 +759,15 @@ void SceneReader::readDebias(const json& v, const std::string& key) {
         rejectUnknown(*pmf, pmfKey, {"type", "alpha"});
         d.pmf.type = PmfType::PowerLaw;
         if (find(*pmf, "alpha")) d.pmf.alpha = openUnit("alpha");
+    } else if (type == "auto") {
+        rejectUnknown(*pmf, pmfKey, {"type", "pilot_spp", "pilot_levels"});
+        d.pmf.type = PmfType::Auto;
+        if (const json* s = find(*pmf, "pilot_spp")) d.pmf.pilotSpp = integer(*s, member(pmfKey, "pilot_spp"), 1, 1024);
+        if (const json* l = find(*pmf, "pilot_levels"))
+            d.pmf.pilotLevels = integer(*l, member(pmfKey, "pilot_levels"), 3, 32);
     } else {
-        fail(member(pmfKey, "type"), fmt::format("unknown pmf type '{}' (expected \"geometric\" or \"power_law\")", type));
+        fail(member(pmfKey, "type"),
+             fmt::format("unknown pmf type '{}' (expected \"geometric\", \"power_law\" or \"auto\")", type));
     }
 }
 

@@ -16,6 +16,7 @@
 #include "render/image_output.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
+#include "study/pmf_pilot.h"
 
 namespace fs = std::filesystem;
 
@@ -163,16 +164,23 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
 
     for (size_t mi = 0; mi < o.methods.size(); ++mi) {
         const Method& method = o.methods[mi];
+        // A pilot's time is part of the method's cost: its curve starts after it.
+        PmfPilotResult pilot;
+        if (resolveAutoPmf(context, scenes[mi], o.seed, &pilot)) log(pilot.summary());
         Renderer renderer(context, scenes[mi], o.seed);
         MethodSummary summary;
         summary.method = method;
         summary.estimator = renderer.plan().estimator;
+        summary.pilotGpuSeconds = pilot.pilotGpuSeconds;
+        summary.pilotWallSeconds = pilot.pilotWallSeconds;
+        if (pilot.pilotGpuSeconds > 0.0)
+            summary.estimator += fmt::format(" (chosen by a {:.2f} s pilot)", pilot.pilotGpuSeconds);
         log(fmt::format("{}: {}", method.label, summary.estimator));
         Film film;
         for (size_t s = 0; s < sliceCount; ++s) {
             RenderRequest request;
             if (o.timeBudget > 0.0) {
-                request.timeLimit = timeTargets[s] - renderer.stats().wallSeconds;
+                request.timeLimit = timeTargets[s] - renderer.stats().wallSeconds - summary.pilotWallSeconds;
                 if (request.timeLimit <= 0.0) continue;  // the last batch already reached this slice
             } else {
                 request.spp = o.sppList[s] - renderer.stats().samplesPerPixel;
@@ -183,8 +191,8 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
             p.method = method.label;
             p.slice = uint32_t(s);
             p.spp = film.samplesPerPixel();
-            p.wallSeconds = renderer.stats().wallSeconds;
-            p.gpuSeconds = gpuSeconds(renderer.stats());
+            p.wallSeconds = renderer.stats().wallSeconds + summary.pilotWallSeconds;
+            p.gpuSeconds = gpuSeconds(renderer.stats()) + summary.pilotGpuSeconds;
             p.error = compareToReference(film, reference);
             report.points.push_back(p);
             log(fmt::format("  slice {}: {} spp, {:.3f} s GPU, relMSE {:.4g}, bias {:+.4g}", s, p.spp, p.gpuSeconds,

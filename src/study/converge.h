@@ -50,6 +50,8 @@ struct MethodSummary {
     double secondsTo1e2 = -1.0;   // GPU seconds to relative MSE 1e-2 (-1: not within the budget)
     double secondsTo1e3 = -1.0;
     uint64_t nonFiniteSamples = 0;
+    double pilotGpuSeconds = 0.0;   // pmf pilot (pmf "auto"), included in the times above
+    double pilotWallSeconds = 0.0;
 };
 
 struct ConvergeReport {

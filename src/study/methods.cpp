@@ -17,11 +17,10 @@ struct Preset {
     std::vector<SceneOverride> (*make)(uint32_t k);
 };
 
-std::vector<SceneOverride> pathDepth(uint32_t k, const char* estimator) {
+std::vector<SceneOverride> pathDepth(uint32_t k, const char* estimator, const char* pmf = R"({"type":"geometric","r":0.65})") {
     std::vector<SceneOverride> o = {{"integrator.max_bounces", std::to_string(k)}};
     if (estimator)
-        o.push_back({"integrator.debias", fmt::format(R"({{"estimator":"{}","pmf":{{"type":"geometric","r":0.65}}}})",
-                                                      estimator)});
+        o.push_back({"integrator.debias", fmt::format(R"({{"estimator":"{}","pmf":{}}})", estimator, pmf)});
     else
         o.push_back({"integrator.debias", "null"});
     return o;
@@ -33,6 +32,10 @@ const Preset kPresets[] = {
      [](uint32_t k) { return pathDepth(k, "single_term"); }},
     {"sum", "debiased path depth, Russian-roulette sum estimator at base k, geometric pmf r = 0.65",
      [](uint32_t k) { return pathDepth(k, "sum"); }},
+    {"single_term_power", "debiased path depth, single-term estimator at base k, power-law pmf alpha = 2/3",
+     [](uint32_t k) { return pathDepth(k, "single_term", R"({"type":"power_law"})"); }},
+    {"single_term_auto", "debiased path depth, single-term estimator at base k, pmf chosen by a pilot (pilot time counted)",
+     [](uint32_t k) { return pathDepth(k, "single_term", R"({"type":"auto"})"); }},
 };
 
 std::string trim(const std::string& s) {
