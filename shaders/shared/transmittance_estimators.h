@@ -45,7 +45,7 @@ struct TrEstimator {
 // A segment of one medium along a ray.
 struct TrSegment {
     DensityProfile profile;  // d(t); kProfileGrid: TR_GRID_DENSITY
-    vec3 sigmaT; float length;
+    vec3 sigmaT; float len;
     vec3 origin; float densityMin;   // ray origin (grids)
     vec3 dir; float densityMax;      // unit direction (grids); densityMin/Max bound d on [0, length]
     uint medium; uint pad0; uint pad1; uint pad2;
@@ -65,7 +65,7 @@ FN float trMaxComponent(vec3 v) { return max(v.x, max(v.y, v.z)); }
 // ---- Comb walker: sum of d at l (u + first + i stride) / n, i < count ----
 FN float combSum(TrSegment s, float u, uint first, uint stride, uint count, float n, INOUT(uint) lookups) {
     float sum = 0.0f;
-    float scale = s.length / n;
+    float scale = s.len / n;
     for (uint i = 0u; i < count; ++i) sum += trDensity(s, scale * (u + float(first + i * stride)));
     lookups += count;
     return sum;
@@ -75,7 +75,7 @@ FN float combSum(TrSegment s, float u, uint first, uint stride, uint count, floa
 FN vec3 trRayMarch(uint k, TrModel m, uint form, TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
     float n = float(1u << k);
     float sum = combSum(s, rngNext(rng), 0u, 1u, 1u << k, n, lookups);
-    return trForm3(m, form, s.sigmaT * (sum * s.length / n));
+    return trForm3(m, form, s.sigmaT * (sum * s.len / n));
 }
 
 // Debiased ray marching (ESTIMATORS.md section 4): one comb of 2^(j+1) points, ordered as
@@ -95,15 +95,15 @@ FN vec3 trDebiasedRayMarch(TrEstimator e, TrModel m, uint form, TrSegment s, INO
     float even = 0.0f, odd = 0.0f;
     for (uint i = 0u; i < subCombs; ++i) {
         float sub = combSum(s, u, i, subCombs, subPoints, n, lookups);
-        base += trForm3(m, form, s.sigmaT * (sub * s.length / float(subPoints)));
+        base += trForm3(m, form, s.sigmaT * (sub * s.len / float(subPoints)));
         if ((i & 1u) == 0u) even += sub;
         else odd += sub;
     }
     base /= float(subCombs);
     float half_n = 0.5f * n;
-    vec3 gAll = trForm3(m, form, s.sigmaT * ((even + odd) * s.length / n));
-    vec3 gEven = trForm3(m, form, s.sigmaT * (even * s.length / half_n));
-    vec3 gOdd = trForm3(m, form, s.sigmaT * (odd * s.length / half_n));
+    vec3 gAll = trForm3(m, form, s.sigmaT * ((even + odd) * s.len / n));
+    vec3 gEven = trForm3(m, form, s.sigmaT * (even * s.len / half_n));
+    vec3 gOdd = trForm3(m, form, s.sigmaT * (odd * s.len / half_n));
     vec3 d = gAll - 0.5f * (gEven + gOdd);
     return base + d / levelProbability(e.pmf, j - k);
 }
@@ -120,13 +120,13 @@ FN vec3 trTrack(uint mode, TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
     if (mode == kTrEstResidualRatioTracking) {
         control = 0.5f * (s.densityMin + s.densityMax);
         mu = sMax * 0.5f * (s.densityMax - s.densityMin);
-        result = exp(-s.sigmaT * (control * s.length));
+        result = exp(-s.sigmaT * (control * s.len));
     }
     if (!(mu > 0.0f)) return result;
     float t = 0.0f;
     for (uint guard = 0u; guard < 1000000u; ++guard) {
         t -= log(1.0f - rngNext(rng)) / mu;
-        if (t >= s.length) break;
+        if (t >= s.len) break;
         vec3 sigma = s.sigmaT * (trDensity(s, t) - control);
         lookups += 1u;
         if (mode == kTrEstDeltaTracking) {
@@ -150,13 +150,13 @@ FN vec3 trTrack(uint mode, TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
 // Each comb has M points, M from the density bounds so that a comb's error stays below ~1/2.
 // Constant density: every X_i = tau, so Z = exp(-tau) exactly (zero variance).
 FN vec3 trUnbiasedRayMarch(TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
-    float spread = trMaxComponent(s.sigmaT) * (s.densityMax - s.densityMin) * s.length;
+    float spread = trMaxComponent(s.sigmaT) * (s.densityMax - s.densityMin) * s.len;
     uint points = uint(clamp(ceil(2.0f * spread), 1.0f, 256.0f));
     uint order = 0u;
     while (order < kTrMaxOrder && rngNext(rng) < kTrOrderQ) ++order;
     vec3 x[kTrMaxOrder + 1u];
     for (uint i = 0u; i <= order; ++i)
-        x[i] = s.sigmaT * (combSum(s, rngNext(rng), 0u, 1u, points, float(points), lookups) * s.length / float(points));
+        x[i] = s.sigmaT * (combSum(s, rngNext(rng), 0u, 1u, points, float(points), lookups) * s.len / float(points));
     vec3 total = vec3(0.0f);
     for (uint p = 0u; p <= order; ++p) {
         vec3 series = vec3(1.0f);
@@ -177,7 +177,7 @@ FN vec3 trUnbiasedRayMarch(TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
 
 // ---- Dispatch over the estimators ----
 FN vec3 trEstimate(TrEstimator e, TrModel m, uint form, TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
-    if (!(s.length > 0.0f)) return vec3(trForm(m, form, 0.0f));
+    if (!(s.len > 0.0f)) return vec3(trForm(m, form, 0.0f));
     if (e.type == kTrEstRayMarch) return trRayMarch(e.level, m, form, s, rng, lookups);
     if (e.type == kTrEstDebiasedRayMarch) return trDebiasedRayMarch(e, m, form, s, rng, lookups);
     if (e.type == kTrEstUnbiasedRayMarch) return trUnbiasedRayMarch(s, rng, lookups);

@@ -14,6 +14,15 @@ std::string pmfDescription(const PmfSettings& pmf) {
     return fmt::format("power-law pmf, alpha = {:g}", pmf.alpha);
 }
 
+// The transmittance model type every medium shares (simple models only), else 0xffffffff.
+uint32_t sharedTransmittanceModel(const Scene& scene) {
+    if (scene.media.empty()) return 0;
+    uint32_t type = scene.media[0].transmittance.type;
+    for (const Medium& m : scene.media)
+        if (m.transmittance.type != type) return 0xffffffffu;
+    return type == shader::kTrInterpolated ? 0xffffffffu : type;
+}
+
 RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
     using namespace shader;
     RenderPlan plan;
@@ -24,7 +33,18 @@ RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
                            "integrator 'path_tracer': camera paths with next-event estimation and MIS, "
                            "accumulated per pixel"});
     plan.skipped.push_back({"photon_trace, hash_grid_build, gather", "the integrator does not use photons"});
-    plan.skipped.push_back({"ray_march", "the scene has no participating media"});
+    if (f.media) {
+        const auto& t = in.transmittance;
+        std::string how = transmittanceEstimatorName(t.type);
+        if (t.type == TransmittanceEstimatorType::RayMarch) how += fmt::format(" (2^{} points, biased)", t.level);
+        if (t.type == TransmittanceEstimatorType::DebiasedRayMarch)
+            how += fmt::format(" (base level {}, {})", t.level, pmfDescription(t.pmf));
+        plan.passes[0].why += fmt::format("; volumetric path tracing through {} medi{} (single and multiple scattering, "
+                                          "next-event estimation), every transmittance by {}",
+                                          f.mediumCount, f.mediumCount == 1 ? "um" : "a", how);
+    } else {
+        plan.skipped.push_back({"volume tracking", "the scene has no participating media: volume code folded out of path_trace"});
+    }
 
     // ---- Estimator ----
     if (in.debias.estimator != DebiasEstimator::None && in.debias.pmf.type == PmfType::Auto)
@@ -57,6 +77,8 @@ RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
     feature("environment", f.environment, "infinite_sphere emitter", "no environment emitter");
     feature("debias", in.debias.estimator != DebiasEstimator::None, "debias block in the integrator",
             "no debias block: plain I(k)");
+    feature("media", f.media, "media or forward boundaries present", "no participating media");
+    feature("grid media", f.grids, "voxel grid media present", "no grid media");
 
     const uint32_t filter = scene.camera.filter == "dirac" ? kFilterDirac
                             : scene.camera.filter == "box" ? kFilterBox
@@ -80,6 +102,15 @@ RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
         {kSpecMaxTraceDepth, std::max(maxTraceDepth, in.maxBounces + 1)},
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
         {kSpecPilot, in.pilotLevel != kNoPilotLevel},
+        {kSpecHasMedia, f.media},
+        {kSpecTrEstimator, uint32_t(in.transmittance.type)},
+        {kSpecTrLevel, in.transmittance.level},
+        {kSpecTrPmfType, uint32_t(in.transmittance.pmf.type)},
+        {kSpecTrPmfR, gpu::specFloat(in.transmittance.pmf.r)},
+        {kSpecTrPmfAlpha, gpu::specFloat(in.transmittance.pmf.alpha)},
+        {kSpecCameraMedium, uint32_t(scene.camera.medium + 1)},
+        {kSpecHasGrids, f.grids},
+        {kSpecTrModel, sharedTransmittanceModel(scene)},
     };
     return plan;
 }

@@ -33,6 +33,9 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
     nodes_ = makeBuffer(gpuScene_.nodes, "bvh nodes");
     materials_ = makeBuffer(gpuScene_.materials, "materials");
     lights_ = makeBuffer(gpuScene_.lights, "lights");
+    media_ = makeBuffer(gpuScene_.media, "media");
+    gridData_ = makeBuffer(gpuScene_.gridData, "grid data");
+    primMedia_ = makeBuffer(gpuScene_.primMedia, "prim media");
 
     // ---- Accumulation: (hi, lo) vec4 pairs per channel and pixel ----
     const uint64_t pixels = uint64_t(scene.camera.width) * scene.camera.height;
@@ -45,7 +48,7 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
 
     pathTrace_ = std::make_unique<gpu::ComputePipeline>(context, "path_trace", shader::kPathTraceBindingCount,
                                                         uint32_t(sizeof(shader::PathTracePush)), plan_.pathTraceSpec);
-    pathTrace_->bindBuffers({&prims_, &nodes_, &materials_, &lights_});
+    pathTrace_->bindBuffers({&prims_, &nodes_, &materials_, &lights_, &media_, &gridData_, &primMedia_});
     batch_ = std::make_unique<gpu::CommandBatch>(context, kMaxDispatchesPerBatch);
 
     // Lavapipe compiles a pipeline at its first dispatch: an empty dispatch (no samples) moves

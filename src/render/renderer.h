@@ -74,6 +74,7 @@ private:
     GpuScene gpuScene_;
     RenderPlan plan_;
     gpu::Buffer prims_, nodes_, materials_, lights_, accum_;
+    gpu::Buffer media_, gridData_, primMedia_;  // participating media (dummies without)
     std::unique_ptr<gpu::ComputePipeline> pathTrace_;
     std::unique_ptr<gpu::CommandBatch> batch_;
     uint64_t sampleIndex_ = 0;  // next global sample index

@@ -55,7 +55,7 @@ TrSegment falloffSegment(double tau, float b = 2.0f) {
     float a = float(tau * b / (1.0 - std::exp(-double(b))));
     s.profile = makeProfile(kProfileExponential, a, b, 0.0f);
     s.sigmaT = glm::vec3(1.0f);
-    s.length = 1.0f;
+    s.len = 1.0f;
     glm::vec2 bounds = profileBounds(s.profile, 0.0f, 1.0f);
     s.densityMin = bounds.x;
     s.densityMax = bounds.y;
@@ -66,14 +66,14 @@ TrSegment profileSegment(DensityProfile p, float length, float looseness = 1.0f)
     TrSegment s{};
     s.profile = p;
     s.sigmaT = glm::vec3(1.0f);
-    s.length = length;
+    s.len = length;
     glm::vec2 bounds = profileBounds(p, 0.0f, length);
     s.densityMin = bounds.x;
     s.densityMax = bounds.y * looseness;
     return s;
 }
 
-double tauOf(const TrSegment& s) { return profileIntegral(s.profile, 0.0, s.length); }
+double tauOf(const TrSegment& s) { return profileIntegral(s.profile, 0.0, s.len); }
 
 struct Moments {
     double mean = 0, varianceOfMean = 0, variance = 0, lookupsPerSample = 0;
@@ -221,13 +221,13 @@ TEST(TransmittanceEstimators, CorrelatedDifferenceHasMuchLowerVariance) {
         float even = combSum(s, u, 0, 2, 1u << j, float(1u << (j + 1)), n);
         float odd = combSum(s, u, 1, 2, 1u << j, float(1u << (j + 1)), n);
         float all = (even + odd) / float(1u << (j + 1)), e = even / float(1u << j), o = odd / float(1u << j);
-        return glm::vec3(trForm(m, 0, all * s.length) -
-                         0.5f * (trForm(m, 0, e * s.length) + trForm(m, 0, o * s.length)));
+        return glm::vec3(trForm(m, 0, all * s.len) -
+                         0.5f * (trForm(m, 0, e * s.len) + trForm(m, 0, o * s.len)));
     };
     auto uncorrelated = [&](Rng& rng, uint32_t& n) {
         float fine = combSum(s, rngNext(rng), 0, 1, 1u << (j + 1), float(1u << (j + 1)), n) / float(1u << (j + 1));
         float coarse = combSum(s, rngNext(rng), 0, 1, 1u << j, float(1u << j), n) / float(1u << j);
-        return glm::vec3(trForm(m, 0, fine * s.length) - trForm(m, 0, coarse * s.length));
+        return glm::vec3(trForm(m, 0, fine * s.len) - trForm(m, 0, coarse * s.len));
     };
     Moments c = run(correlated, 50000, 21), u = run(uncorrelated, 50000, 22);
     // Same expectation, D_j = I(j+1) - I(j)
