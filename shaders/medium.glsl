@@ -5,8 +5,8 @@
 // Every transmittance factor of a path comes from the chosen estimator
 // (shared/transmittance_estimators.h), on camera segments and on shadow rays, so a path's
 // contribution is unbiased exactly when the estimator is. Free-flight distances are drawn from a
-// guide: the medium's own transmittance model over a homogeneous majorant mu (optical depth
-// mu (t - t0)); the estimated transmittance divided by the guide pdf weights the sample:
+// guide: the medium's own transmittance model over a homogeneous density mu (optical depth
+// mu (t - t0), mu from a coarse independent comb of the segment); the estimated transmittance divided by the guide pdf weights the sample:
 //   scatter at t:  sigma_s(x_t) sigmaBar <T_{start,medium}(0, t)> / (mu sigmaBar F_{start,medium}(mu (t - t0)))
 //   pass to l:     <T_{start,surface}(0, l)> / F_{start,surface}(mu (l - t0))
 // (forms of shared/transmittance.h; start = surface or medium vertex). Media are indexed + 1
@@ -219,8 +219,16 @@ bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, ino
     TrSegment whole = mediumSegment(mi, o, d, l);
     // The guide works on the part of [0, l] with density (grids: the box).
     float t0 = (kHasGrids && media[mi].type == kMediumGrid) ? dot(whole.origin - o, d) : 0.0;
-    // Purely absorbing media never scatter: every path passes (mu = 0).
-    float mu = trMaxComponent(media[mi].sigmaS) > 0.0 ? trMaxComponent(whole.sigmaT) * whole.densityMax : 0.0;
+    // The guide's homogeneous density: an 8-point comb average of the segment, drawn independently
+    // of everything else (so the pdf is fixed given it), at least 10% of the majorant so that every
+    // point with density keeps a positive pdf. Purely absorbing media never scatter (mu = 0).
+    float guideDensity = whole.densityMax;
+    if (media[mi].type != kMediumHomogeneous && whole.len > 0.0) {
+        uint lookups = 0u;
+        float average = combSum(whole, rngNext(rng), 0u, 1u, 8u, 8.0, lookups) / 8.0;
+        guideDensity = max(average, 0.1 * whole.densityMax);
+    }
+    float mu = trMaxComponent(media[mi].sigmaS) > 0.0 ? trMaxComponent(whole.sigmaT) * guideDensity : 0.0;
     float sigmaBar = trSigmaBar(model);
     float u = rngNext(rng);
     if (mu > 0.0 && whole.len > 0.0) {

@@ -135,3 +135,34 @@ TEST_F(MediaRender, ConstantGridRendersLikeTheHomogeneousMedium) {
     ZSummary z = compareToClosedForm(blockMeans(film, kBlock), slabClosedForm(scene, exponentialModel().model));
     EXPECT_EQ(z.failing, 0u) << z.worst;
 }
+
+// ---- The Davis cloud (procedural grid, Davis transmittance, multiple scattering) ----
+namespace {
+Scene cloudScene(const std::string& estimator) {
+    return loadTestScene("scenes/davis-cloud.json",
+                         {{"camera.resolution", "[24,16]"}, {"integrator.transmittance_estimator", estimator}});
+}
+
+const std::vector<RegionMean>& cloudReference() {
+    // Biased marching at a very high level: 2^6 points per segment.
+    static std::vector<RegionMean> regions =
+        blockMeans(renderFilm(cloudScene(R"({"type":"ray_march","level":6})"), 1024, 31), 4);
+    return regions;
+}
+}  // namespace
+
+TEST_F(MediaRender, DavisCloudDebiasedAgreesWithHighLevelMarching) {
+    Film film = renderFilm(cloudScene(R"({"type":"debiased_ray_march","level":1})"), 1024, 32);
+    auto regions = blockMeans(film, 4);
+    ZSummary z = compareRegions(regions, cloudReference(), sidakThreshold(kAlpha, regions.size() * 3));
+    EXPECT_EQ(z.failing, 0u) << z.worst << " (" << z.tests << " tests)";
+    EXPECT_EQ(film.nonFiniteSamples(), 0u);
+}
+
+TEST_F(MediaRender, DavisCloudLowLevelMarchingDisagrees) {
+    Film film = renderFilm(cloudScene(R"({"type":"ray_march","level":0})"), 1024, 33);
+    auto regions = blockMeans(film, 4);
+    ZSummary z = compareRegions(regions, cloudReference(), sidakThreshold(kAlpha, regions.size() * 3));
+    std::printf("low-level marching: %zu of %zu region tests fail (worst %s)\n", z.failing, z.tests, z.worst.c_str());
+    EXPECT_GE(z.failing, z.tests / 4) << z.worst;
+}

@@ -46,6 +46,18 @@ RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
         plan.skipped.push_back({"volume tracking", "the scene has no participating media: volume code folded out of path_trace"});
     }
 
+    // ---- Level schedule: only a debiased render (not the pilot) has levels to schedule ----
+    if (in.debias.estimator != DebiasEstimator::None && in.pilotLevel == kNoPilotLevel)
+        plan.levelSchedule = in.debias.schedule;
+    if (plan.levelSchedule == LevelSchedule::Queued) {
+        plan.passes.insert(plan.passes.begin(),
+                           {{"level_count", "level_count", "level_schedule 'queued': histogram of the drawn levels"},
+                            {"level_scan", "level_scan", "prefix sum of the level histogram"},
+                            {"level_scatter", "level_scatter", "(pixel, sample) items sorted by level into a queue"}});
+        plan.passes.back().why += "; lanes take items from the level queue";
+        plan.passes.push_back({"path_resolve", "path_resolve", "accumulates the queued results per pixel in sample order"});
+    }
+
     // ---- Estimator ----
     if (in.debias.estimator != DebiasEstimator::None && in.debias.pmf.type == PmfType::Auto)
         plan.passes.insert(plan.passes.begin(),
@@ -60,9 +72,14 @@ RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
         plan.estimator = fmt::format("biased path tracing I(k), k = max_bounces = {}", in.maxBounces);
     } else {
         plan.estimator = fmt::format(
-            "debiased path depth ({} estimator), base k = {}, {}, level drawn per pixel sample in the shader",
+            "debiased path depth ({} estimator), base k = {}, {}, {}",
             in.debias.estimator == DebiasEstimator::SingleTerm ? "single-term" : "Russian-roulette sum",
-            in.maxBounces, pmfDescription(in.debias.pmf));
+            in.maxBounces, pmfDescription(in.debias.pmf),
+            plan.levelSchedule == LevelSchedule::Uniform
+                ? "one level per sample index shared by all pixels (level_schedule 'uniform')"
+            : plan.levelSchedule == LevelSchedule::Queued
+                ? "level drawn per pixel sample, work sorted by level (level_schedule 'queued')"
+                : "level drawn per pixel sample in the shader");
     }
 
     // ---- Feature switches folded into the pipeline ----
@@ -111,6 +128,7 @@ RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
         {kSpecCameraMedium, uint32_t(scene.camera.medium + 1)},
         {kSpecHasGrids, f.grids},
         {kSpecTrModel, sharedTransmittanceModel(scene)},
+        {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},
     };
     return plan;
 }

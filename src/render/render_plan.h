@@ -37,6 +37,7 @@ struct RenderPlan {
     std::vector<FeatureSwitch> features;
     std::vector<gpu::SpecConstant> pathTraceSpec;
     std::string estimator;               // one line describing the estimator
+    LevelSchedule levelSchedule = LevelSchedule::PerPixel;  // as run (per_pixel unless debiased)
 };
 
 RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& features);

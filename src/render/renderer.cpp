@@ -49,7 +49,26 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
     pathTrace_ = std::make_unique<gpu::ComputePipeline>(context, "path_trace", shader::kPathTraceBindingCount,
                                                         uint32_t(sizeof(shader::PathTracePush)), plan_.pathTraceSpec);
     pathTrace_->bindBuffers({&prims_, &nodes_, &materials_, &lights_, &media_, &gridData_, &primMedia_});
-    batch_ = std::make_unique<gpu::CommandBatch>(context, kMaxDispatchesPerBatch);
+    if (plan_.levelSchedule == LevelSchedule::Queued) {
+        // ---- Level queue: header, items, two vec4 results per item (see gpu_types.h) ----
+        const uint64_t capacity = pixels * samplesPerDispatch();
+        if (capacity >= (uint64_t(1) << 27))
+            throw std::runtime_error(fmt::format("{}x{} pixels is too many for the queued level schedule",
+                                                 scene.camera.width, scene.camera.height));
+        queueCapacity_ = uint32_t(capacity);
+        auto align4 = [](uint64_t n) { return (n + 3) / 4 * 4; };
+        const uint64_t chunks = (capacity + shader::kLevelChunk - 1) / shader::kLevelChunk;
+        const uint64_t bytes = (align4(chunks * shader::kLevelBuckets) + align4(capacity)) * 4 + capacity * 32;
+        levelQueue_ = gpu::Buffer(context, bytes, "level queue");
+        levelQueue_.fill(0);
+        const uint32_t pushBytes = uint32_t(sizeof(shader::PathTracePush));
+        levelCount_ = std::make_unique<gpu::ComputePipeline>(context, "level_count", 0, pushBytes, plan_.pathTraceSpec);
+        levelScan_ = std::make_unique<gpu::ComputePipeline>(context, "level_scan", 0, pushBytes, plan_.pathTraceSpec);
+        levelScatter_ =
+            std::make_unique<gpu::ComputePipeline>(context, "level_scatter", 0, pushBytes, plan_.pathTraceSpec);
+        pathResolve_ = std::make_unique<gpu::ComputePipeline>(context, "path_resolve", 0, pushBytes, plan_.pathTraceSpec);
+    }
+    batch_ = std::make_unique<gpu::CommandBatch>(context, kMaxDispatchesPerBatch * passesPerStep());
 
     // Lavapipe compiles a pipeline at its first dispatch: an empty dispatch (no samples) moves
     // that cost into the setup time, out of the first batch's timing.
@@ -58,13 +77,37 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
     warm.height = scene.camera.height;
     warm.accumAddressLo = uint32_t(accum_.address());
     warm.accumAddressHi = uint32_t(accum_.address() >> 32);
+    if (levelCount_) {
+        warm.queueAddressLo = uint32_t(levelQueue_.address());
+        warm.queueAddressHi = uint32_t(levelQueue_.address() >> 32);
+        warm.queueCapacity = queueCapacity_;
+    }
     batch_->begin();
-    batch_->dispatch(*pathTrace_, &warm, sizeof(warm), 1, 1, 1, "warm-up");
+    recordStep(warm, 1, 1);
     batch_->submitAndWait();
     stats_.setupSeconds = secondsSince(start);
 }
 
 Renderer::~Renderer() = default;
+
+void Renderer::recordStep(const shader::PathTracePush& push, uint32_t groupsX, uint32_t groupsY) {
+    const char* name = push.sampleCount ? "path_trace" : "warm-up";
+    if (!levelCount_) {
+        batch_->dispatch(*pathTrace_, &push, sizeof(push), groupsX, groupsY, 1, name);
+        return;
+    }
+    // ---- Queued schedule: sort this step's (pixel, sample) items by level, trace, resolve ----
+    const uint64_t items = uint64_t(push.width) * push.height * push.sampleCount;
+    const uint64_t chunks = (items + shader::kLevelChunk - 1) / shader::kLevelChunk;
+    const uint32_t itemGroups =
+        uint32_t(std::max<uint64_t>((chunks + shader::kLevelQueueGroupSize - 1) / shader::kLevelQueueGroupSize, 1));
+    const bool warm = push.sampleCount == 0;
+    batch_->dispatch(*levelCount_, &push, sizeof(push), itemGroups, 1, 1, warm ? "warm-up" : "level_count");
+    batch_->dispatch(*levelScan_, &push, sizeof(push), 1, 1, 1, warm ? "warm-up" : "level_scan");
+    batch_->dispatch(*levelScatter_, &push, sizeof(push), itemGroups, 1, 1, warm ? "warm-up" : "level_scatter");
+    batch_->dispatch(*pathTrace_, &push, sizeof(push), groupsX, groupsY, 1, name);
+    batch_->dispatch(*pathResolve_, &push, sizeof(push), groupsX, groupsY, 1, warm ? "warm-up" : "path_resolve");
+}
 
 uint32_t Renderer::samplesPerDispatch() const {
     // About a million paths per dispatch, at most 16 samples per pixel in one thread.
@@ -86,6 +129,11 @@ void Renderer::render(const RenderRequest& request) {
     push.pilotLevel = scene_.integrator.pilotLevel;
     push.accumAddressLo = uint32_t(accum_.address());
     push.accumAddressHi = uint32_t(accum_.address() >> 32);
+    if (levelCount_) {
+        push.queueAddressLo = uint32_t(levelQueue_.address());
+        push.queueAddressHi = uint32_t(levelQueue_.address() >> 32);
+        push.queueCapacity = queueCapacity_;
+    }
     const uint32_t groupsX = (cam.width + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
     const uint32_t groupsY = (cam.height + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
     const uint32_t perDispatch = samplesPerDispatch();
@@ -107,7 +155,7 @@ void Renderer::render(const RenderRequest& request) {
             if (remaining == 0) break;
             push.sampleBase = uint32_t(sampleIndex_ + batchSamples);
             push.sampleCount = uint32_t(std::min<uint64_t>(perDispatch, remaining));
-            batch_->dispatch(*pathTrace_, &push, sizeof(push), groupsX, groupsY, 1, "path_trace");
+            recordStep(push, groupsX, groupsY);
             batchSamples += push.sampleCount;
         }
         auto batchStart = Clock::now();
@@ -125,7 +173,7 @@ void Renderer::render(const RenderRequest& request) {
         if (timed) {
             // Do not overshoot the time limit by more than about one batch.
             double left = request.timeLimit - secondsSince(start);
-            double perDispatchSeconds = batchSeconds / std::max<size_t>(timings.size(), 1);
+            double perDispatchSeconds = batchSeconds / std::max<size_t>(timings.size() / passesPerStep(), 1);
             if (left > 0.0 && perDispatchSeconds > 0.0)
                 dispatchesPerBatch = std::clamp<uint32_t>(uint32_t(left / perDispatchSeconds), 1, dispatchesPerBatch);
         }

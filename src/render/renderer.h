@@ -20,6 +20,7 @@
 #include "render/gpu_scene.h"
 #include "render/render_plan.h"
 #include "scene/scene.h"
+#include "shared/gpu_types.h"
 
 namespace telescope {
 
@@ -67,6 +68,9 @@ public:
 
 private:
     uint32_t samplesPerDispatch() const;
+    // Records the passes of one step of samples (one dispatch, or five in the queued schedule).
+    void recordStep(const shader::PathTracePush& push, uint32_t groupsX, uint32_t groupsY);
+    uint32_t passesPerStep() const { return levelCount_ ? 5u : 1u; }
 
     gpu::Context& context_;
     const Scene& scene_;
@@ -76,6 +80,10 @@ private:
     gpu::Buffer prims_, nodes_, materials_, lights_, accum_;
     gpu::Buffer media_, gridData_, primMedia_;  // participating media (dummies without)
     std::unique_ptr<gpu::ComputePipeline> pathTrace_;
+    // Queued level schedule only (RenderPlan::levelSchedule): the level queue and its passes.
+    std::unique_ptr<gpu::ComputePipeline> levelCount_, levelScan_, levelScatter_, pathResolve_;
+    gpu::Buffer levelQueue_;
+    uint32_t queueCapacity_ = 0;
     std::unique_ptr<gpu::CommandBatch> batch_;
     uint64_t sampleIndex_ = 0;  // next global sample index
     RenderStats stats_;
