@@ -1,6 +1,6 @@
 // transmittance_study: one estimator on one 1-D problem (`telescope study transmittance`). Each
 // thread draws samplesPerThread independent estimates of T on the unit segment and writes their
-// sum, sum of squares and the density lookups they took (the work).
+// sum, sum of squares, the density lookups they took (the work) and the largest |Z|.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 
@@ -30,6 +30,7 @@ void main() {
         uint lookups = 0u;
         float z = trEstimate(e, pc.model, kFormSurfaceSurface, s, rng, lookups).x;
         sums += vec4(z, z * z, float(lookups), 0.0);
+        sums.w = max(sums.w, abs(z));
     }
     results[pc.outputOffset + id] = sums;
 }

@@ -316,3 +316,20 @@ TEST_F(Cli, PlanSaysWhetherVolumeCodeIsCompiled) {
     EXPECT_NE(without.find("media            off"), std::string::npos) << without;
     EXPECT_NE(without.find("volume code folded out"), std::string::npos) << without;
 }
+
+TEST_F(Cli, StudyTransmittanceWritesCsvHeatMapsAndSummary) {
+    std::string dir = out("study");
+    CommandResult r = run("study transmittance -q --samples 256 -o " + dir);
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    std::ifstream csv(dir + "/transmittance.csv");
+    std::string header;
+    std::getline(csv, header);
+    EXPECT_NE(header.find("work_x_rel_mse"), std::string::npos) << header;
+    size_t rows = 0;
+    for (std::string line; std::getline(csv, line);) ++rows;
+    EXPECT_EQ(rows, 2u * 300 + 4u * 150) << "two ray marchers on both models, four exponential-only estimators";
+    EXPECT_TRUE(fs::exists(dir + "/summary.md"));
+    for (const char* e : {"ray_march", "debiased_ray_march", "delta_tracking", "ratio_tracking", "residual_ratio_tracking",
+                          "unbiased_ray_march"})
+        EXPECT_TRUE(fs::exists(dir + "/heat_" + std::string(e) + ".png")) << e << " (gnuplot-nox installed?)";
+}

@@ -30,11 +30,13 @@ CONST uint kTrEstUnbiasedRayMarch = 5u;     // Kettunen et al. 2021
 CONST uint kTrEstCount = 6u;
 
 // Largest comb of debiased marching: 2^kTrMaxCombLog2 points; deeper levels are marched at this
-// size (a truncation of the telescope). In single precision the correction's rounding error, about
-// 1e-7 g, is divided by p(j), so its second moment grows like sum_j 1e-14 / p(j): the cap keeps it
-// below ~1e-7. The truncation drops E[D_j] = O(4^-j) for j >= 15, below 1e-9 for smooth g, and
-// happens with probability 0.35^(15-k) for the default pmf.
-CONST uint kTrMaxCombLog2 = 16u;
+// size (a truncation of the telescope). Why a cap at all: (1) in single precision the correction's
+// rounding error, about 1e-7 g, is divided by p(j), so its second moment grows like
+// sum_j 1e-14 / p(j); (2) lavapipe (llvmpipe) silently ends any loop after 65535 iterations per
+// SIMD group (its loop limiter), which would cut a deeper comb short. The truncation drops
+// E[D_j] = O(4^-j) for j >= 13, below 1e-8 for smooth g, with probability 0.35^(13-k) for the
+// default pmf.
+CONST uint kTrMaxCombLog2 = 14u;
 // Unbiased ray marching: highest expansion order kept (P(N >= 16) = 4^-16 with q = 1/4).
 CONST uint kTrMaxOrder = 15u;
 CONST float kTrOrderQ = 0.25f;

@@ -9,7 +9,7 @@
 
 SHADER_NAMESPACE_BEGIN
 
-CONST uint kTrStudyBindingResults = 0u;  // vec4 per thread: sum Z, sum Z^2, sum lookups, 0
+CONST uint kTrStudyBindingResults = 0u;  // vec4 per thread: sum Z, sum Z^2, sum lookups, max |Z|
 CONST uint kTrStudyBindingCount = 1u;
 CONST uint kTrStudyGroupSize = 64u;
 

@@ -24,7 +24,9 @@ namespace {
 
 constexpr double kTargets[] = {0.01, 0.05, 0.1, 0.2, 0.35, 0.5, 0.65, 0.8, 0.9, 0.99};
 constexpr double kLooseness[] = {1.0, 1.25, 1.5, 1.75, 2.0};
-constexpr uint32_t kSamplesPerThread = 16;
+// One estimate per thread: lavapipe ends a loop after 65535 iterations per SIMD group, so a
+// thread must not accumulate the lookups of many estimates.
+constexpr uint32_t kSamplesPerThread = 1;
 constexpr double kDavisAlpha = 1.5625;  // c = 0.8 (Misso et al.)
 
 struct Problem {
@@ -143,12 +145,13 @@ TransmittanceStudyReport runTransmittanceStudy(gpu::Context& context, const Tran
         results.download(raw.data(), raw.size() * sizeof(glm::vec4));
         for (size_t i = 0; i < count; ++i) {
             const Job& job = jobs[first + i];
-            double s = 0, s2 = 0, lookups = 0;
+            double s = 0, s2 = 0, lookups = 0, maxAbs = 0;
             for (uint32_t t = 0; t < threads; ++t) {
                 const glm::vec4& v = raw[i * threads + t];
                 s += v.x;
                 s2 += v.y;
                 lookups += v.z;
+                maxAbs = std::max(maxAbs, double(v.w));
             }
             TransmittanceStudyRow row;
             row.estimator = job.estimator->name;
@@ -162,6 +165,7 @@ TransmittanceStudyReport runTransmittanceStudy(gpu::Context& context, const Tran
             const double bias = row.mean - job.problem->truth;
             row.mse = row.variance + bias * bias;
             row.lookups = lookups / samples;
+            row.maxAbs = maxAbs;
             report.rows.push_back(row);
         }
     }
@@ -169,13 +173,13 @@ TransmittanceStudyReport runTransmittanceStudy(gpu::Context& context, const Tran
     // ---- CSV ----
     fs::create_directories(o.outDir);
     auto out = [&](const std::string& name) { return (fs::path(o.outDir) / name).string(); };
-    std::string csv = "estimator,model,profile,target,looseness,mean,truth,variance,bias,mse,lookups,work_x_rel_mse\n";
+    std::string csv = "estimator,model,profile,target,looseness,mean,truth,variance,bias,mse,lookups,work_x_rel_mse,max_abs_z\n";
     for (size_t i = 0; i < report.rows.size(); ++i) {
         const auto& r = report.rows[i];
         const double truth = jobs[i].problem->truth;
-        csv += fmt::format("{},{},{},{},{},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", r.estimator, r.model,
+        csv += fmt::format("{},{},{},{},{},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", r.estimator, r.model,
                            r.profile, r.target, r.looseness, r.mean, truth, r.variance, r.mean - truth, r.mse, r.lookups,
-                           r.workTimesRelMse());
+                           r.workTimesRelMse(), r.maxAbs);
     }
     writeText(out("transmittance.csv"), csv);
     report.files.push_back(out("transmittance.csv"));

@@ -26,7 +26,7 @@ struct TransmittanceStudyOptions {
 struct TransmittanceStudyRow {
     std::string estimator, model, profile;
     double target = 0, looseness = 0;
-    double mean = 0, variance = 0, mse = 0, lookups = 0;
+    double mean = 0, variance = 0, mse = 0, lookups = 0, maxAbs = 0;
     double workTimesRelMse() const { return lookups * mse / (target * target); }
 };
 
