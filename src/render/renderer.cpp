@@ -43,69 +43,44 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
     accum_ = gpu::Buffer(context, accumBytes, "accumulation");
     accum_.fill(0);
 
-    pathTrace_ = std::make_unique<gpu::ComputePipeline>(context, "path_trace", shader::kPathTraceBindingCount,
-                                                        uint32_t(sizeof(shader::PathTracePush)), plan_.pathTraceSpec);
-    pathTrace_->bindBuffers({&prims_, &nodes_, &materials_, &lights_});
+    const RenderBuffers buffers{&prims_, &nodes_, &materials_, &lights_, &accum_};
+    passes_ = usesPhotons(scene.integrator) ? makePhotonPasses(context, scene, plan_, buffers, seed)
+                                            : makePathTracePasses(context, scene, plan_, buffers, seed);
     batch_ = std::make_unique<gpu::CommandBatch>(context, kMaxDispatchesPerBatch);
 
-    // Lavapipe compiles a pipeline at its first dispatch: an empty dispatch (no samples) moves
-    // that cost into the setup time, out of the first batch's timing.
-    shader::PathTracePush warm{};
-    warm.width = scene.camera.width;
-    warm.height = scene.camera.height;
-    warm.accumAddressLo = uint32_t(accum_.address());
-    warm.accumAddressHi = uint32_t(accum_.address() >> 32);
+    // Lavapipe compiles a pipeline at its first dispatch: empty dispatches (no samples) move that
+    // cost into the setup time, out of the first batch's timing.
     batch_->begin();
-    batch_->dispatch(*pathTrace_, &warm, sizeof(warm), 1, 1, 1, "warm-up");
+    passes_->recordWarmUp(*batch_);
     batch_->submitAndWait();
     stats_.setupSeconds = secondsSince(start);
 }
 
 Renderer::~Renderer() = default;
 
-uint32_t Renderer::samplesPerDispatch() const {
-    // About a million paths per dispatch, at most 16 samples per pixel in one thread.
-    uint64_t pixels = uint64_t(scene_.camera.width) * scene_.camera.height;
-    return uint32_t(std::clamp<uint64_t>((1u << 20) / std::max<uint64_t>(pixels, 1), 1, 16));
-}
-
 void Renderer::render(const RenderRequest& request) {
     const Camera& cam = scene_.camera;
-    shader::PathTracePush push{};
-    push.cameraPosition = cam.position;
-    push.cameraRight = cam.right;
-    push.cameraUp = cam.up;
-    push.cameraForward = cam.forward;
-    push.planeDistance = 1.0f / std::tan(0.5f * glm::radians(cam.fovDegrees));
-    push.width = cam.width;
-    push.height = cam.height;
-    push.seed = seed_;
-    push.pilotLevel = scene_.integrator.pilotLevel;
-    push.accumAddressLo = uint32_t(accum_.address());
-    push.accumAddressHi = uint32_t(accum_.address() >> 32);
-    const uint32_t groupsX = (cam.width + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
-    const uint32_t groupsY = (cam.height + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
-    const uint32_t perDispatch = samplesPerDispatch();
+    const uint32_t perUnit = passes_->samplesPerUnit();
     const double pixels = double(cam.width) * cam.height;
 
     const bool timed = request.timeLimit > 0.0;
     const auto start = Clock::now();
     uint64_t done = 0;
-    uint32_t dispatchesPerBatch = 1;  // grows until a batch takes about a quarter second
+    uint32_t unitsPerBatch = 1;  // grows until a batch takes about a quarter second
     while (true) {
         double elapsed = secondsSince(start);
         if (timed ? elapsed >= request.timeLimit : done >= request.spp) break;
 
-        // ---- One batch: several dispatches, one submit ----
+        // ---- One batch: several units, one submit ----
         batch_->begin();
         uint64_t batchSamples = 0;
-        for (uint32_t d = 0; d < dispatchesPerBatch; ++d) {
-            uint64_t remaining = timed ? perDispatch : request.spp - done - batchSamples;
+        uint32_t units = 0;
+        for (; units < std::min(unitsPerBatch, passes_->maxUnitsPerBatch()); ++units) {
+            uint64_t remaining = timed ? perUnit : request.spp - done - batchSamples;
             if (remaining == 0) break;
-            push.sampleBase = uint32_t(sampleIndex_ + batchSamples);
-            push.sampleCount = uint32_t(std::min<uint64_t>(perDispatch, remaining));
-            batch_->dispatch(*pathTrace_, &push, sizeof(push), groupsX, groupsY, 1, "path_trace");
-            batchSamples += push.sampleCount;
+            uint32_t samples = uint32_t(std::min<uint64_t>(perUnit, remaining));
+            passes_->recordUnit(*batch_, sampleIndex_ + batchSamples, samples);
+            batchSamples += samples;
         }
         auto batchStart = Clock::now();
         auto timings = batch_->submitAndWait();
@@ -115,16 +90,17 @@ void Renderer::render(const RenderRequest& request) {
             stats_.passes[t.name].dispatches++;
             stats_.passes[t.name].gpuMs += t.gpuMs;
         }
+        if (!passes_->batchComplete()) continue;  // nothing was accumulated: run it again
         done += batchSamples;
         sampleIndex_ += batchSamples;
 
-        if (batchSeconds < 0.1 && dispatchesPerBatch < kMaxDispatchesPerBatch) dispatchesPerBatch *= 2;
+        if (batchSeconds < 0.1 && unitsPerBatch < kMaxDispatchesPerBatch) unitsPerBatch *= 2;
         if (timed) {
-            // Do not overshoot the time limit by more than about one batch.
+            // Do not overshoot the time limit by more than about one unit.
             double left = request.timeLimit - secondsSince(start);
-            double perDispatchSeconds = batchSeconds / std::max<size_t>(timings.size(), 1);
-            if (left > 0.0 && perDispatchSeconds > 0.0)
-                dispatchesPerBatch = std::clamp<uint32_t>(uint32_t(left / perDispatchSeconds), 1, dispatchesPerBatch);
+            double perUnitSeconds = batchSeconds / std::max<uint32_t>(units, 1);
+            if (left > 0.0 && perUnitSeconds > 0.0)
+                unitsPerBatch = std::clamp<uint32_t>(uint32_t(left / perUnitSeconds), 1, unitsPerBatch);
         }
         if (request.progress) {
             RenderProgress p;

@@ -1,5 +1,9 @@
 // Schedules the passes of a plan on the device and accumulates samples into a Film.
 //
+// The integrator contributes its passes (SamplePasses: path_trace, or photon_trace,
+// hash_grid_build and gather); the Renderer batches their units into submits, times every
+// dispatch by name and stops at a sample count or a time limit.
+//
 // A Renderer owns the scene buffers, the accumulation buffer and the pipelines. render() may be
 // called repeatedly: samples continue from where the last call stopped (their random numbers
 // depend only on pixel, global sample index and seed), so a render can be extended, and renders
@@ -19,6 +23,7 @@
 #include "render/film.h"
 #include "render/gpu_scene.h"
 #include "render/render_plan.h"
+#include "render/sample_passes.h"
 #include "scene/scene.h"
 
 namespace telescope {
@@ -66,15 +71,13 @@ public:
     uint32_t seed() const { return seed_; }
 
 private:
-    uint32_t samplesPerDispatch() const;
-
     gpu::Context& context_;
     const Scene& scene_;
     uint32_t seed_;
     GpuScene gpuScene_;
     RenderPlan plan_;
     gpu::Buffer prims_, nodes_, materials_, lights_, accum_;
-    std::unique_ptr<gpu::ComputePipeline> pathTrace_;
+    std::unique_ptr<SamplePasses> passes_;  // the integrator's passes
     std::unique_ptr<gpu::CommandBatch> batch_;
     uint64_t sampleIndex_ = 0;  // next global sample index
     RenderStats stats_;
