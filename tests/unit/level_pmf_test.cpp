@@ -97,6 +97,25 @@ TEST(LevelPmf, SamplesStayFiniteAtTheEdgeOfTheUnitInterval) {
     EXPECT_EQ(levelSample(powerLaw(2.0f / 3.0f), 0.0f), 0u);
 }
 
+// Stability: for every pmf a user can ask for, every level the sampler can return has a finite,
+// positive 1 / p(j) and 1 / P(N >= j), so a correction divided by them is never inf or NaN.
+TEST(LevelPmf, InverseProbabilitiesStayFiniteForExtremePmfs) {
+    std::vector<LevelPmf> pmfs;
+    for (float r : {1e-7f, 1e-3f, 0.3f, 0.65f, 0.99f, 0.999999f}) pmfs.push_back(geometric(r));
+    for (float a : {1e-4f, 0.01f, 0.5f, 2.0f / 3.0f, 0.99f, 0.9999f}) pmfs.push_back(powerLaw(a));
+    std::vector<float> us = {0.0f, 1e-30f, 1e-7f, 0.5f, 0.9f, 0.999f, 1.0f - 1.0f / 16777216.0f};
+    for (uint32_t i = 1; i < 4096; ++i) us.push_back(float(i) / 4096.0f);
+    for (const LevelPmf& pmf : pmfs) {
+        for (float u : us) {
+            const uint m = levelSample(pmf, u);
+            const float p = levelProbability(pmf, m), tail = levelTail(pmf, m);
+            ASSERT_TRUE(std::isfinite(1.0f / p) && p > 0.0f)
+                << "type " << pmf.type << " r " << pmf.r << " alpha " << pmf.alpha << " u " << u << " m " << m;
+            ASSERT_TRUE(std::isfinite(1.0f / tail) && tail > 0.0f) << "type " << pmf.type << " m " << m;
+        }
+    }
+}
+
 TEST(Rng, NeverReturnsOneAndStreamsDiffer) {
     Rng a = rngCreate(0, 0, 1), b = rngCreate(0, 1, 1), c = rngCreate(1, 0, 1);
     int same = 0;

@@ -1,0 +1,280 @@
+// Hard-case stability suite: scenes and settings at the edges of what the estimators handle.
+// Every case renders a small image and checks that every sample was finite (the renderer counts
+// non-finite samples in its stats; the suite requires 0) and every output pixel is finite; where
+// the answer is known, the estimate must also lie within its statistical bound.
+//
+// Each case is one test so a failure names the case. The scenes are built here from the shipped
+// ones by scaling or editing the JSON, so the cases stay readable next to their expectations.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "region_stats.h"
+#include "render_harness.h"
+
+using namespace telescope;
+using namespace telescope::test;
+using nlohmann::json;
+
+namespace {
+
+json readJson(const std::string& relative) {
+    std::ifstream in(sourcePath(relative));
+    return json::parse(in);
+}
+
+Scene sceneFromJson(const json& j, const std::string& name, const std::vector<SceneOverride>& overrides = {}) {
+    return loadSceneFromString(j.dump(), name, sourcePath("scenes"), overrides);
+}
+
+// Multiplies every position and scale of the scene (primitives and camera) by s.
+json scaled(json j, double s) {
+    auto scaleVec = [s](json& v) {
+        for (auto& x : v) x = x.get<double>() * s;
+    };
+    for (auto& p : j["primitives"]) {
+        auto& t = p["transform"];
+        if (t.contains("position")) scaleVec(t["position"]);
+        if (t.contains("scale")) {
+            if (t["scale"].is_array()) scaleVec(t["scale"]);
+            else t["scale"] = t["scale"].get<double>() * s;
+        } else if (p["type"] != "point") {
+            t["scale"] = s;
+        }
+    }
+    auto& c = j["camera"]["transform"];
+    scaleVec(c["position"]);
+    scaleVec(c["look_at"]);
+    return j;
+}
+
+// Every pixel of every channel finite, and no sample dropped as non-finite.
+void expectFinite(const Film& film, const std::string& what) {
+    EXPECT_EQ(film.nonFiniteSamples(), 0u) << what;
+    size_t bad = 0;
+    for (size_t i = 0; i < film.pixelCount(); ++i) {
+        const glm::dvec3 m = film.mean(shader::kChannelEstimate, i);
+        const glm::dvec3 v = film.varianceOfMean(i);
+        for (int c = 0; c < 3; ++c)
+            if (!std::isfinite(m[c]) || !std::isfinite(v[c])) ++bad;
+    }
+    EXPECT_EQ(bad, 0u) << what << ": non-finite output pixels";
+}
+
+void expectValue(const Film& film, double value, uint32_t block, const std::string& what) {
+    auto regions = blockMeans(film, block);
+    const double t = sidakThreshold(1e-3, regions.size() * 3);
+    ZSummary z = compareToValue(regions, glm::dvec3(value), t);
+    EXPECT_EQ(z.failing, 0u) << what << ": " << z.worst << " (threshold " << t << ")";
+}
+
+// The mean over the whole image against a known value (a Z-test at 1e-3 per channel).
+void expectImageMean(const Film& film, double value, const std::string& what) {
+    glm::dvec3 mean(0.0), variance(0.0);
+    const double n = double(film.pixelCount());
+    for (size_t i = 0; i < film.pixelCount(); ++i) {
+        mean += film.mean(shader::kChannelEstimate, i) / n;
+        variance += film.varianceOfMean(i) / (n * n);
+    }
+    const double t = sidakThreshold(1e-3, 3);
+    for (int c = 0; c < 3; ++c) {
+        const double z = (mean[c] - value) / std::sqrt(variance[c]);
+        EXPECT_LT(std::abs(z), t) << what << ": image mean " << mean[c] << " vs " << value << ", Z = " << z;
+    }
+}
+
+constexpr const char* kSingleTerm = R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.5}})";
+constexpr const char* kSum = R"({"estimator":"sum","pmf":{"type":"geometric","r":0.5}})";
+
+class Stability : public ::testing::Test {
+protected:
+    void TearDown() override { expectNoValidationMessages(); }
+};
+
+// ---- Scene scale: the furnace's answer, Le / (1 - a) = 2, does not depend on its size ----
+
+void furnaceAtScale(double s) {
+    json j = scaled(readJson("scenes/furnace.json"), s);
+    Scene scene = sceneFromJson(j, "furnace x" + std::to_string(s),
+                                {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "1"},
+                                 {"integrator.debias", kSingleTerm}});
+    Film film = renderFilm(scene, 96, 101);
+    const std::string what = "furnace scaled by " + std::to_string(s);
+    expectFinite(film, what);
+    expectValue(film, 2.0, 4, what);
+}
+
+TEST_F(Stability, TinySceneScale) { furnaceAtScale(1e-4); }
+TEST_F(Stability, HugeSceneScale) { furnaceAtScale(1e4); }
+
+// ---- A point light over a plane at extreme distances: E = I / d^2 straight below ----
+// Radiance of the Lambertian plane (albedo 0.5) under the light: 0.5 / pi * I / d^2, I = 1.
+
+void pointPlaneAtScale(double s) {
+    json j = scaled(readJson("scenes/point-plane.json"), s);
+    Scene scene = sceneFromJson(j, "point-plane x" + std::to_string(s),
+                                {{"camera.resolution", "[16,16]"}, {"camera.fov", "2"},
+                                 {"integrator.max_bounces", "1"}});
+    Film film = renderFilm(scene, 4, 7);
+    const std::string what = "point-plane scaled by " + std::to_string(s);
+    expectFinite(film, what);
+    // The 2-degree view sees the plane straight below: cos = 1 within 1e-3.
+    const double expected = 0.5 / M_PI / (s * s);
+    const glm::dvec3 centre = film.mean(shader::kChannelEstimate, 8 * 16 + 8);
+    EXPECT_NEAR(centre.x / expected, 1.0, 2e-3) << what;
+}
+
+TEST_F(Stability, PointLightAtMicroDistance) { pointPlaneAtScale(1e-3); }
+TEST_F(Stability, PointLightAtKiloDistance) { pointPlaneAtScale(1e3); }
+
+// ---- Very bright, tiny light: a sphere of radius 1e-4 with emission 1e8 ----
+
+TEST_F(Stability, VeryBrightTinyLight) {
+    json j = readJson("scenes/cornell-box.json");
+    for (auto& p : j["primitives"]) {
+        if (p.contains("emission")) p["emission"] = 0.0;
+    }
+    j["primitives"].push_back({{"name", "speck"},
+                               {"type", "sphere"},
+                               {"bsdf", j["primitives"][0]["bsdf"]},
+                               {"emission", 1e8},
+                               {"transform", {{"position", {0.0, 1.5, 0.0}}, {"scale", 1e-4}}}});
+    Scene scene = sceneFromJson(j, "bright speck", {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "2"},
+                                                     {"integrator.debias", kSingleTerm}});
+    expectFinite(renderFilm(scene, 16, 3), "bright tiny light");
+}
+
+// ---- Grazing angles: the camera a hair above the plane looking along it ----
+
+TEST_F(Stability, GrazingCamera) {
+    json j = readJson("scenes/point-plane.json");
+    j["camera"]["transform"] = {{"position", {0.0, 1e-5, 5.0}}, {"look_at", {0.0, 1e-5, 0.0}}, {"up", {0.0, 1.0, 0.0}}};
+    Scene scene = sceneFromJson(j, "grazing", {{"camera.resolution", "[16,16]"}, {"integrator.debias", kSum},
+                                               {"integrator.max_bounces", "1"}});
+    expectFinite(renderFilm(scene, 16, 5), "grazing camera");
+}
+
+TEST_F(Stability, GrazingLight) {
+    json j = readJson("scenes/point-plane.json");
+    for (auto& p : j["primitives"])
+        if (p["type"] == "point") p["transform"]["position"] = {0.0, 1e-6, 0.0};
+    Scene scene = sceneFromJson(j, "grazing light", {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "1"}});
+    expectFinite(renderFilm(scene, 8, 5), "light grazing the plane");
+}
+
+// ---- Degenerate triangles: zero-area, repeated vertices, a needle ----
+
+TEST_F(Stability, DegenerateTriangles) {
+    const auto dir = std::filesystem::temp_directory_path() / "telescope-stability";
+    std::filesystem::create_directories(dir);
+    const auto obj = dir / "degenerate.obj";
+    {
+        std::ofstream out(obj);
+        out << "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"  // a good quad
+               "v 0 0 0.1\nv 0.5 0.5 0.1\nv 1 1 0.1\n"        // colinear
+               "v 0.2 0.2 0.2\n"                             // one point
+               "v 0 0 0.3\nv 1e-12 0 0.3\nv 0 1 0.3\n"       // needle
+               "f 1 2 3\nf 1 3 4\nf 5 6 7\nf 8 8 8\nf 9 10 11\n";
+    }
+    json j = readJson("scenes/point-plane.json");
+    j["primitives"][0] = {{"name", "mesh"}, {"type", "mesh"}, {"file", obj.string()}, {"bsdf", "grey"},
+                          {"transform", {{"rotation", {-90.0, 0.0, 0.0}}, {"scale", 2.0}}}};
+    Scene scene = sceneFromJson(j, "degenerate", {{"camera.resolution", "[16,16]"}, {"integrator.debias", kSingleTerm},
+                                                  {"integrator.max_bounces", "1"}});
+    expectFinite(renderFilm(scene, 16, 9), "degenerate triangles");
+}
+
+// ---- Level distributions with extreme tails (levels far beyond the trace depth) ----
+
+void furnaceWithDebias(const std::string& debias, double albedo, double expected, uint64_t spp) {
+    Scene scene = loadTestScene("scenes/furnace.json", {{"camera.resolution", "[16,16]"},
+                                                        {"integrator.max_bounces", "1"},
+                                                        {"bsdfs[0].albedo", std::to_string(albedo)},
+                                                        {"integrator.debias", debias}});
+    Film film = renderFilm(scene, spp, 17);
+    expectFinite(film, debias);
+    if (expected > 0.0) expectValue(film, expected, 8, debias);
+}
+
+TEST_F(Stability, GeometricPmfWithTinyR) {
+    // r = 1e-6: levels up to ~1.7e7, far past the trace depth; corrections there are exactly 0.
+    furnaceWithDebias(R"({"estimator":"single_term","pmf":{"type":"geometric","r":1e-6}})", 0.5, 0.0, 8);
+}
+TEST_F(Stability, GeometricPmfWithRNearOne) {
+    // r = 0.999: p(j) underflows float after a dozen levels, which u in [0,1) never reaches.
+    furnaceWithDebias(R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.999}})", 0.5, 0.0, 32);
+}
+TEST_F(Stability, PowerLawPmfHeavyTail) {
+    // alpha = 0.999: P(M >= m) = (m+1)^-0.001, levels clamp at 2^31 - 1.
+    furnaceWithDebias(R"({"estimator":"sum","pmf":{"type":"power_law","alpha":0.999}})", 0.5, 0.0, 8);
+}
+TEST_F(Stability, PowerLawPmfLightTail) {
+    // alpha = 0.01: 1 / P(M >= m) grows like m; the sum estimator stays unbiased.
+    furnaceWithDebias(R"({"estimator":"sum","pmf":{"type":"power_law","alpha":0.01}})", 0.5, 2.0, 256);
+}
+TEST_F(Stability, AlbedoNearOne) {
+    // a = 0.99: L = 100, reached only through hundreds of bounces.
+    furnaceWithDebias(R"({"estimator":"sum","pmf":{"type":"geometric","r":0.01}})", 0.99, 0.0, 16);
+}
+
+// ---- Specular traps: a mirror box never ends a path before the trace-depth cap ----
+
+TEST_F(Stability, MirrorFurnace) {
+    Scene scene = loadTestScene("scenes/furnace.json",
+                                {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "2"},
+                                 {"bsdfs[0]", R"({"name":"grey","type":"mirror","albedo":0.999})"},
+                                 {"integrator.debias", kSingleTerm}});
+    expectFinite(renderFilm(scene, 8, 19), "mirror furnace");
+}
+
+TEST_F(Stability, ExtremeIndexOfRefraction) {
+    for (const char* ior : {"1.0", "1.0001", "20"}) {
+        json j = readJson("scenes/cornell-box.json");
+        j["bsdfs"].push_back({{"name", "glass"}, {"type", "dielectric"}, {"ior", std::stod(ior)}});
+        j["primitives"].push_back({{"name", "ball"}, {"type", "sphere"}, {"bsdf", "glass"},
+                                   {"transform", {{"position", {0.0, 0.5, 0.0}}, {"scale", 0.4}}}});
+        Scene scene = sceneFromJson(j, std::string("ior ") + ior,
+                                    {{"camera.resolution", "[16,16]"}, {"integrator.debias", kSingleTerm},
+                                     {"integrator.max_bounces", "2"}});
+        expectFinite(renderFilm(scene, 8, 23), std::string("dielectric ior ") + ior);
+    }
+}
+
+// ---- Odd image sizes and a camera sitting on a surface ----
+
+TEST_F(Stability, OddImageSizes) {
+    for (const char* res : {"[1,1]", "[7,3]", "[3,17]"}) {
+        Scene scene = loadTestScene("scenes/furnace.json", {{"camera.resolution", res}, {"integrator.max_bounces", "1"},
+                                                            {"integrator.debias", kSingleTerm}});
+        Film film = renderFilm(scene, 64, 29);
+        expectFinite(film, res);
+        expectImageMean(film, 2.0, res);
+    }
+}
+
+TEST_F(Stability, CameraOnASurface) {
+    Scene scene = loadTestScene("scenes/furnace.json", {{"camera.resolution", "[16,16]"},
+                                                        {"camera.transform.position", "[0,0,-1]"},
+                                                        {"camera.transform.look_at", "[0,0,1]"},
+                                                        {"integrator.debias", kSum}, {"integrator.max_bounces", "1"}});
+    expectFinite(renderFilm(scene, 16, 31), "camera on the back wall");
+}
+
+TEST_F(Stability, NoEmissionAnywhere) {
+    json j = readJson("scenes/furnace.json");
+    for (auto& p : j["primitives"]) p["emission"] = 0.0;
+    Scene scene = sceneFromJson(j, "dark furnace", {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "1"},
+                                                    {"integrator.debias", kSingleTerm}});
+    Film film = renderFilm(scene, 8, 37);
+    expectFinite(film, "no emission");
+    for (size_t i = 0; i < film.pixelCount(); ++i) ASSERT_EQ(film.mean(shader::kChannelEstimate, i), glm::dvec3(0.0));
+}
+
+}  // namespace
