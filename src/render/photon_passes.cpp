@@ -186,10 +186,14 @@ public:
 
     bool batchComplete() override {
         const uint64_t stored = map_.storedCount();
+        lastStored_ = stored;
         if (stored <= map_.capacity()) return true;
         map_.reserve(stored + stored / 4);  // the gather skipped its accumulation: repeat the pass
         return false;
     }
+
+    uint64_t photonPathsLastBatch() const override { return tracePush_.pathCount; }
+    uint64_t photonsStoredLastBatch() const override { return lastStored_; }
 
     void recordWarmUp(gpu::CommandBatch& batch) override {
         map_.recordWarmUp(batch);
@@ -211,6 +215,7 @@ private:
     gpu::ComputePipeline trace_, gather_;
     shader::PhotonTracePush tracePush_{};
     shader::GatherPush gatherPush_{};
+    uint64_t lastStored_ = 0;
 };
 
 }  // namespace

@@ -91,6 +91,8 @@ void Renderer::render(const RenderRequest& request) {
             stats_.passes[t.name].gpuMs += t.gpuMs;
         }
         if (!passes_->batchComplete()) continue;  // nothing was accumulated: run it again
+        stats_.photonPaths += passes_->photonPathsLastBatch();
+        stats_.photonsStored += passes_->photonsStoredLastBatch();
         done += batchSamples;
         sampleIndex_ += batchSamples;
 

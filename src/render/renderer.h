@@ -52,6 +52,8 @@ struct RenderStats {
     double setupSeconds = 0.0;  // scene upload and pipeline creation
     uint64_t samplesPerPixel = 0;
     uint64_t submits = 0;
+    uint64_t photonPaths = 0;    // photon mapping: photon paths traced, all passes
+    uint64_t photonsStored = 0;  // photon mapping: photons stored, all passes
     std::map<std::string, PassStats> passes;
 };
 

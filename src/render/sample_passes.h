@@ -37,6 +37,9 @@ public:
     virtual void recordUnit(gpu::CommandBatch& batch, uint64_t sampleBase, uint32_t samples) = 0;
     // After the batch ran: false when it must be recorded and run again.
     virtual bool batchComplete() { return true; }
+    // Photon mapping: photon paths traced and photons stored by the last complete batch.
+    virtual uint64_t photonPathsLastBatch() const { return 0; }
+    virtual uint64_t photonsStoredLastBatch() const { return 0; }
     // Empty dispatches of every pipeline: lavapipe compiles a pipeline at its first dispatch.
     virtual void recordWarmUp(gpu::CommandBatch& batch) = 0;
 };
