@@ -35,7 +35,7 @@ void PhotonMap::allocate(uint64_t capacity) {
     capacity_ = capacity;
     tableSize_ = tableSizeFor(capacity);
     photons_ = gpu::Buffer(context_, capacity * sizeof(shader::Photon), "photons");
-    sorted_ = gpu::Buffer(context_, capacity * sizeof(uint32_t), "photon indices in bucket order");
+    sorted_ = gpu::Buffer(context_, capacity * sizeof(shader::Photon), "photons in bucket order");
     cellCount_ = gpu::Buffer(context_, uint64_t(tableSize_) * 4, "hash grid bucket counts");
     cellStart_ = gpu::Buffer(context_, uint64_t(tableSize_) * 4, "hash grid bucket ends");
     // Block totals of every scan level above the table.
@@ -57,6 +57,10 @@ uint64_t PhotonMap::deviceBytes() const {
 
 void PhotonMap::reserve(uint64_t photons) {
     if (photons > capacity_) allocate(photons);
+}
+
+void PhotonMap::shrinkTo(uint64_t photons) {
+    if (photons * 2 < capacity_) allocate(std::max<uint64_t>(photons, 1));
 }
 
 void PhotonMap::beginPass(float cellSize) {
