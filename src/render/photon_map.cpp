@@ -11,9 +11,10 @@ namespace {
 constexpr uint32_t kMaxTableSize = 1u << 24;
 constexpr uint64_t kMaxGroups = 4096;  // grid-stride loops cover the rest
 
+// Buckets hold cells, and cells hold several photons: half a bucket per photon of capacity.
 uint32_t tableSizeFor(uint64_t capacity) {
     uint32_t t = 1024;
-    while (t < capacity && t < kMaxTableSize) t <<= 1;
+    while (t < capacity / 2 && t < kMaxTableSize) t <<= 1;
     return t;
 }
 uint32_t lo(VkDeviceAddress a) { return uint32_t(a); }
@@ -60,7 +61,7 @@ void PhotonMap::reserve(uint64_t photons) {
 }
 
 void PhotonMap::shrinkTo(uint64_t photons) {
-    if (photons * 2 < capacity_) allocate(std::max<uint64_t>(photons, 1));
+    if (photons * 3 < capacity_ * 2) allocate(std::max<uint64_t>(photons, 1));
 }
 
 void PhotonMap::beginPass(float cellSize) {

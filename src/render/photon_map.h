@@ -4,7 +4,7 @@
 // hash_grid_build pipelines (one per stage of shaders/hash_grid_build.comp).
 //
 // Memory per photon of capacity: 32 bytes (Photon) + 32 (its copy in bucket order) + 8 per hash
-// bucket, with tableSize = the power of two at least the capacity (at most 2^24 buckets).
+// bucket, with tableSize = the power of two at least half the capacity (at most 2^24 buckets).
 #pragma once
 
 #include <cstdint>
@@ -31,7 +31,7 @@ public:
 
     // Grows the buffers to hold at least `photons` photons (contents are lost).
     void reserve(uint64_t photons);
-    // Reallocates for `photons` photons when the capacity is more than twice that (contents lost).
+    // Reallocates for `photons` photons when the capacity is over 1.5 times that (contents lost).
     void shrinkTo(uint64_t photons);
     // Writes the header for the next pass: no photons stored, the given cell size.
     void beginPass(float cellSize);
