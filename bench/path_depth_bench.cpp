@@ -44,7 +44,40 @@ void pathTracing(benchmark::State& state, const std::string& debias) {
     state.SetLabel(context().info().name);
 }
 
+// Level scheduling (debias "level_schedule"): the same debiased estimator with levels drawn per
+// pixel sample (per_pixel), sorted into a level queue first (queued: identical samples), or one
+// level per sample index for all pixels (uniform: same per-pixel variance, correlated pixels).
+// The per-pixel variance is the same for the three, so paths/s ratios are work x MSE ratios.
+void levelSchedule(benchmark::State& state, const std::string& sceneFile, const std::string& schedule) {
+    std::vector<SceneOverride> overrides = {
+        {"camera.resolution", "[256,256]"},
+        {"integrator.max_bounces", "1"},
+        {"integrator.debias", R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.3},"level_schedule":")" +
+                                  schedule + R"("})"}};
+    Scene scene = loadScene(std::string(TELESCOPE_SOURCE_DIR) + "/scenes/" + sceneFile, overrides);
+    Renderer renderer(context(), scene, 1);
+    RenderRequest warmup;
+    warmup.spp = 4;
+    renderer.render(warmup);
+    const uint64_t spp = 16;
+    for (auto _ : state) {
+        RenderRequest request;
+        request.spp = spp;
+        renderer.render(request);
+    }
+    const double paths = double(state.iterations()) * spp * 256.0 * 256.0;
+    state.counters["paths_per_s"] = benchmark::Counter(paths, benchmark::Counter::kIsRate);
+    state.SetLabel(context().info().name);
+}
+
 }  // namespace
+
+BENCHMARK_CAPTURE(levelSchedule, cornell_per_pixel, "cornell-box.json", "per_pixel")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(levelSchedule, cornell_queued, "cornell-box.json", "queued")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(levelSchedule, cornell_uniform, "cornell-box.json", "uniform")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(levelSchedule, furnace_per_pixel, "furnace.json", "per_pixel")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(levelSchedule, furnace_queued, "furnace.json", "queued")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(levelSchedule, furnace_uniform, "furnace.json", "uniform")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 BENCHMARK_CAPTURE(pathTracing, biased, std::string())->Arg(1)->Arg(4)->Arg(16)->Arg(64)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(pathTracing, single_term, std::string("single_term"))->Arg(1)->Arg(4)->Arg(16)->Unit(benchmark::kMillisecond)->UseRealTime();

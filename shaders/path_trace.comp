@@ -2,6 +2,7 @@
 // its square, the base I(k) and the correction (ESTIMATORS.md section 2).
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 
 #include "shared/gpu_types.h"
 #include "shared/rng.h"
@@ -28,6 +29,7 @@ layout(constant_id = kSpecEnvironmentLight) const uint kEnvironmentLight = 0xfff
 layout(constant_id = kSpecMaxTraceDepth) const uint kMaxTraceDepth = 4096u;
 layout(constant_id = kSpecRayEpsilon) const float kRayEpsilon = 1e-5;
 layout(constant_id = kSpecPilot) const bool kPilot = false;
+layout(constant_id = kSpecLevelSchedule) const uint kLevelSchedule = kLevelSchedulePerPixel;
 
 layout(std430, binding = kBindingPrims) readonly buffer PrimBuffer { Prim prims[]; };
 layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[]; };
@@ -53,12 +55,64 @@ PathState startSample(uvec2 pixel, uint pixelIndex, uint s, LevelPmf pmf, out Rn
                       float(pc.height) / w - 2.0 * (float(pixel.y) + jitter.y) / w, pc.planeDistance);
     vec3 dir = normalize(pc.cameraRight * local.x + pc.cameraUp * local.y + pc.cameraForward * local.z);
     uint level = 0u;
-    if (kPilot) level = pc.pilotLevel;
-    else if (kDebiasMode != kDebiasNone) level = levelSample(pmf, rngNext(rng));
+    if (kPilot) {
+        level = pc.pilotLevel;
+    } else if (kDebiasMode != kDebiasNone) {
+        if (kLevelSchedule == kLevelScheduleUniform) {
+            Rng levelRng = rngCreate(0xffffffffu, pc.sampleBase + s, pc.seed);  // the same for every pixel
+            level = levelSample(pmf, rngNext(levelRng));
+        } else {
+            level = levelSample(pmf, rngNext(rng));  // level_queue.glsl drawLevel() repeats this draw
+        }
+    }
     return beginPath(pc.cameraPosition, dir, level);
 }
 
+#include "level_queue.glsl"
+
+// ---- Queued schedule: lanes take (pixel, sample) items from the level-sorted queue ----
+// Lane i takes slots i, i + lanes, i + 2 lanes, ...: the lanes of a SIMD group hold neighbouring
+// slots, so paths of the same level. (Static, so no atomics: the image is repeatable.)
+bool fetchItem(LevelQueueRef q, uint total, inout uint slot, out uint item) {
+    if (slot >= total) return false;
+    item = q.u[queueItemsOffset() + slot];
+    uvec3 lanes = gl_NumWorkGroups * gl_WorkGroupSize;
+    slot += lanes.x * lanes.y;
+    return true;
+}
+
+PathState startItem(uint item, LevelPmf pmf, out Rng rng) {
+    uint pixelCount = pc.width * pc.height;
+    uint pixelIndex = item % pixelCount;
+    uvec2 pixel = uvec2(pixelIndex % pc.width, pixelIndex / pc.width);
+    return startSample(pixel, pixelIndex, item / pixelCount, pmf, rng);
+}
+
+void queuedMain(LevelPmf pmf) {
+    uint total = pc.width * pc.height * pc.sampleCount;
+    LevelQueueRef q = levelQueue();
+    LevelResultsRef results = levelResults();
+    uvec3 lanes = gl_NumWorkGroups * gl_WorkGroupSize;
+    uint slot = gl_GlobalInvocationID.y * lanes.x + gl_GlobalInvocationID.x, item;
+    if (!fetchItem(q, total, slot, item)) return;
+    Rng rng;
+    PathState path = startItem(item, pmf, rng);
+    while (true) {
+        if (pathStep(path, pmf, rng)) continue;
+        vec3 z = path.result.base + path.result.correction;
+        float bad = (any(isnan(z)) || any(isinf(z))) ? 1.0 : 0.0;
+        results.v[2u * item] = vec4(path.result.base, bad);
+        results.v[2u * item + 1u] = vec4(path.result.correction, 0.0);
+        if (!fetchItem(q, total, slot, item)) break;
+        path = startItem(item, pmf, rng);
+    }
+}
+
 void main() {
+    if (kLevelSchedule == kLevelScheduleQueued) {
+        if (pc.sampleCount != 0u) queuedMain(LevelPmf(kPmfType, kPmfR, kPmfAlpha));
+        return;
+    }
     uvec2 pixel = gl_GlobalInvocationID.xy;
     if (pixel.x >= pc.width || pixel.y >= pc.height) return;
     uint pixelIndex = pixel.y * pc.width + pixel.x;

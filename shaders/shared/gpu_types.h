@@ -90,6 +90,7 @@ CONST uint kSpecEnvironmentLight = 13u;  // light index, or 0xffffffff for none
 CONST uint kSpecMaxTraceDepth = 14u;
 CONST uint kSpecRayEpsilon = 15u;        // absolute ray offset, from the scene size
 CONST uint kSpecPilot = 16u;             // pmf pilot: every sample takes the level pc.pilotLevel
+CONST uint kSpecLevelSchedule = 17u;     // kLevelSchedule*: how per-sample levels are laid out on lanes
 
 CONST uint kFilterBox = 0u;
 CONST uint kFilterTent = 1u;
@@ -106,8 +107,32 @@ struct PathTracePush {
     uint sampleCount;   // samples per pixel in this dispatch
     uint accumAddressLo; uint accumAddressHi;  // device address of the accumulation buffer
     uint pilotLevel;    // pmf pilot only (kSpecPilot): the fixed level m = j - k
-    uint pad0; uint pad1; uint pad2;
+    uint queueAddressLo; uint queueAddressHi;  // level queue (kLevelScheduleQueued only)
+    uint queueCapacity;                        // items the level queue holds
 };
+
+// ---- Level scheduling (ESTIMATORS.md section 1; issue "level scheduling") ----
+// per_pixel: each lane traces its own pixel's samples, each sample with its own level (the
+//            paper's estimator; lanes of a SIMD group hold paths of different lengths).
+// uniform:   one level per sample index shared by every pixel of the dispatch: no level
+//            divergence, still unbiased per pixel, but errors are correlated across pixels.
+// queued:    the per_pixel estimator sample for sample (same random numbers), with the work
+//            sorted by level: level_count / level_scan / level_scatter build a queue of
+//            (pixel, sample) items ordered by level (a counting sort over chunks of items, one
+//            lane per chunk: no atomics, so the queue and the image are repeatable), lane i of
+//            path_trace takes queue slots i, i + lanes, ... (neighbouring lanes hold the same
+//            level), and path_resolve accumulates the per-item results in sample order.
+CONST uint kLevelSchedulePerPixel = 0u;
+CONST uint kLevelScheduleUniform = 1u;
+CONST uint kLevelScheduleQueued = 2u;
+CONST uint kLevelBuckets = 64u;          // levels >= 63 share the last bucket
+CONST uint kLevelChunk = 64u;            // items per lane in level_count / level_scatter
+CONST uint kLevelQueueGroupSize = 64u;
+// Queue block, by device address, for `capacity` items in chunks = ceil(capacity / kLevelChunk):
+//   uint chunkOffsets[chunks * kLevelBuckets]  (counts, then slot offsets after level_scan)
+//   uint items[capacity]                        (item = sample * pixelCount + pixel)
+//   vec4 results[2 * capacity]                  (base rgb + non-finite flag, correction rgb)
+// each region starting on a 16-byte boundary.
 
 // Accumulation: per pixel and channel a compensated sum (hi, lo) of vec4.
 // index of the hi part = (channel * pixelCount + pixel) * 2, lo = hi + 1.

@@ -20,6 +20,18 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
                            "accumulated per pixel"});
     plan.skipped.push_back({"photon_trace, hash_grid_build, gather", "the integrator does not use photons"});
 
+    // ---- Level schedule: only a debiased render (not the pilot) has levels to schedule ----
+    if (in.debias.estimator != DebiasEstimator::None && in.pilotLevel == kNoPilotLevel)
+        plan.levelSchedule = in.debias.schedule;
+    if (plan.levelSchedule == LevelSchedule::Queued) {
+        plan.passes.insert(plan.passes.begin(),
+                           {{"level_count", "level_count", "level_schedule 'queued': histogram of the drawn levels"},
+                            {"level_scan", "level_scan", "prefix sum of the level histogram"},
+                            {"level_scatter", "level_scatter", "(pixel, sample) items sorted by level into a queue"}});
+        plan.passes.back().why += "; lanes take items from the level queue";
+        plan.passes.push_back({"path_resolve", "path_resolve", "accumulates the queued results per pixel in sample order"});
+    }
+
     // ---- Estimator ----
     if (in.debias.estimator != DebiasEstimator::None && in.debias.pmf.type == PmfType::Auto)
         plan.passes.insert(plan.passes.begin(),
@@ -34,9 +46,14 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         plan.estimator = fmt::format("biased path tracing I(k), k = max_bounces = {}", in.maxBounces);
     } else {
         plan.estimator = fmt::format(
-            "debiased path depth ({} estimator), base k = {}, {}, level drawn per pixel sample in the shader",
+            "debiased path depth ({} estimator), base k = {}, {}, {}",
             in.debias.estimator == DebiasEstimator::SingleTerm ? "single-term" : "Russian-roulette sum",
-            in.maxBounces, pmfDescription(in.debias.pmf));
+            in.maxBounces, pmfDescription(in.debias.pmf),
+            plan.levelSchedule == LevelSchedule::Uniform
+                ? "one level per sample index shared by all pixels (level_schedule 'uniform')"
+            : plan.levelSchedule == LevelSchedule::Queued
+                ? "level drawn per pixel sample, work sorted by level (level_schedule 'queued')"
+                : "level drawn per pixel sample in the shader");
     }
 
     // ---- Feature switches folded into the pipeline ----
@@ -72,6 +89,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecMaxTraceDepth, std::max(maxTraceDepth, in.maxBounces + 1)},
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
         {kSpecPilot, in.pilotLevel != kNoPilotLevel},
+        {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},
     };
 }
 
@@ -102,24 +120,70 @@ public:
         // About a million paths per dispatch, at most 16 samples per pixel in one thread.
         const uint64_t pixels = uint64_t(cam.width) * cam.height;
         samplesPerUnit_ = uint32_t(std::clamp<uint64_t>((1u << 20) / std::max<uint64_t>(pixels, 1), 1, 16));
+        if (plan.levelSchedule == LevelSchedule::Queued) makeLevelQueue(context, plan, pixels * samplesPerUnit_);
     }
 
     uint32_t samplesPerUnit() const override { return samplesPerUnit_; }
-    uint32_t maxUnitsPerBatch() const override { return 64; }
+    // A CommandBatch holds 64 dispatches x the passes of the integrator (see Renderer).
+    uint32_t maxUnitsPerBatch() const override { return levelCount_ ? 12 : 64; }
 
     void recordUnit(gpu::CommandBatch& batch, uint64_t sampleBase, uint32_t samples) override {
         push_.sampleBase = uint32_t(sampleBase);
         push_.sampleCount = samples;
-        batch.dispatch(pipeline_, &push_, sizeof(push_), groupsX_, groupsY_, 1, "path_trace");
+        record(batch, push_, false);
     }
 
     void recordWarmUp(gpu::CommandBatch& batch) override {
         shader::PathTracePush warm = push_;
         warm.sampleCount = 0;
-        batch.dispatch(pipeline_, &warm, sizeof(warm), 1, 1, 1, "warm-up");
+        record(batch, warm, true);
     }
 
 private:
+    // ---- Queued level schedule: the level queue and its passes (gpu_types.h) ----
+    void makeLevelQueue(gpu::Context& context, const RenderPlan& plan, uint64_t capacity) {
+        if (capacity >= (uint64_t(1) << 27))
+            throw std::runtime_error(fmt::format("{} samples per dispatch is too many for the queued level schedule",
+                                                 capacity));
+        auto align4 = [](uint64_t n) { return (n + 3) / 4 * 4; };
+        const uint64_t chunks = (capacity + shader::kLevelChunk - 1) / shader::kLevelChunk;
+        const uint64_t bytes = (align4(chunks * shader::kLevelBuckets) + align4(capacity)) * 4 + capacity * 32;
+        levelQueue_ = gpu::Buffer(context, bytes, "level queue");
+        levelQueue_.fill(0);
+        push_.queueAddressLo = uint32_t(levelQueue_.address());
+        push_.queueAddressHi = uint32_t(levelQueue_.address() >> 32);
+        push_.queueCapacity = uint32_t(capacity);
+        const uint32_t pushBytes = uint32_t(sizeof(shader::PathTracePush));
+        auto make = [&](const char* name) {
+            return std::make_unique<gpu::ComputePipeline>(context, name, 0, pushBytes, plan.pathTraceSpec);
+        };
+        levelCount_ = make("level_count");
+        levelScan_ = make("level_scan");
+        levelScatter_ = make("level_scatter");
+        pathResolve_ = make("path_resolve");
+    }
+
+    void record(gpu::CommandBatch& batch, const shader::PathTracePush& push, bool warm) {
+        if (!levelCount_) {
+            batch.dispatch(pipeline_, &push, sizeof(push), warm ? 1 : groupsX_, warm ? 1 : groupsY_, 1,
+                           warm ? "warm-up" : "path_trace");
+            return;
+        }
+        // Sort this unit's (pixel, sample) items by level, trace them, resolve per pixel.
+        const uint64_t items = uint64_t(push.width) * push.height * push.sampleCount;
+        const uint64_t chunks = (items + shader::kLevelChunk - 1) / shader::kLevelChunk;
+        const uint32_t chunkGroups = uint32_t(
+            std::max<uint64_t>((chunks + shader::kLevelQueueGroupSize - 1) / shader::kLevelQueueGroupSize, 1));
+        auto name = [warm](const char* pass) { return warm ? "warm-up" : pass; };
+        batch.dispatch(*levelCount_, &push, sizeof(push), chunkGroups, 1, 1, name("level_count"));
+        batch.dispatch(*levelScan_, &push, sizeof(push), 1, 1, 1, name("level_scan"));
+        batch.dispatch(*levelScatter_, &push, sizeof(push), chunkGroups, 1, 1, name("level_scatter"));
+        batch.dispatch(pipeline_, &push, sizeof(push), groupsX_, groupsY_, 1, name("path_trace"));
+        batch.dispatch(*pathResolve_, &push, sizeof(push), groupsX_, groupsY_, 1, name("path_resolve"));
+    }
+
+    std::unique_ptr<gpu::ComputePipeline> levelCount_, levelScan_, levelScatter_, pathResolve_;
+    gpu::Buffer levelQueue_;
     gpu::ComputePipeline pipeline_;
     shader::PathTracePush push_{};
     uint32_t groupsX_ = 1, groupsY_ = 1, samplesPerUnit_ = 1;

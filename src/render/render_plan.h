@@ -39,6 +39,7 @@ struct RenderPlan {
     std::vector<gpu::SpecConstant> photonSpec;     // photon_trace and gather
     std::string featuresOf = "path_trace";         // the pipeline(s) the feature switches describe
     std::string estimator;               // one line describing the estimator
+    LevelSchedule levelSchedule = LevelSchedule::PerPixel;  // as run (per_pixel unless debiased)
 };
 
 RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& features);

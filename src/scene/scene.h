@@ -75,9 +75,13 @@ struct PmfSettings {
 
 constexpr uint32_t kNoPilotLevel = 0xffffffffu;
 
+// How per-sample levels are laid out on the device's lanes (shared/gpu_types.h kLevelSchedule*).
+enum class LevelSchedule : uint32_t { PerPixel = 0, Uniform = 1, Queued = 2 };
+
 struct DebiasSettings {
     DebiasEstimator estimator = DebiasEstimator::None;
     PmfSettings pmf;
+    LevelSchedule schedule = LevelSchedule::PerPixel;
 };
 
 enum class IntegratorType : uint32_t { PathTracer = 0, PhotonMap = 1, ProgressivePhotonMap = 2 };

@@ -795,7 +795,7 @@ void SceneReader::readDebias(const json& v, const std::string& key) {
         for (const auto& [name, value] : obj.items())
             if (!isOneOf(known, name)) fail(member(objKey, name), fmt::format("unknown key '{}' in {}", name, objKey));
     };
-    rejectUnknown(v, key, {"estimator", "pmf"});
+    rejectUnknown(v, key, {"estimator", "pmf", "level_schedule"});
     DebiasSettings& d = scene_.integrator.debias;
 
     const std::string estimatorKey = member(key, "estimator");
@@ -805,6 +805,15 @@ void SceneReader::readDebias(const json& v, const std::string& key) {
     if (name == "single_term") d.estimator = DebiasEstimator::SingleTerm;
     else if (name == "sum") d.estimator = DebiasEstimator::Sum;
     else fail(estimatorKey, fmt::format("unknown debias estimator '{}' (expected \"single_term\" or \"sum\")", name));
+
+    if (const json* schedule = find(v, "level_schedule")) {
+        const std::string scheduleKey = member(key, "level_schedule");
+        const std::string s = string(*schedule, scheduleKey);
+        if (s == "per_pixel") d.schedule = LevelSchedule::PerPixel;
+        else if (s == "uniform") d.schedule = LevelSchedule::Uniform;
+        else if (s == "queued") d.schedule = LevelSchedule::Queued;
+        else fail(scheduleKey, fmt::format("unknown level schedule '{}' (expected \"per_pixel\", \"uniform\" or \"queued\")", s));
+    }
 
     const json* pmf = find(v, "pmf");
     if (!pmf) return;

@@ -181,7 +181,12 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
             RenderRequest request;
             if (o.timeBudget > 0.0) {
                 request.timeLimit = timeTargets[s] - renderer.stats().wallSeconds - summary.pilotWallSeconds;
-                if (request.timeLimit <= 0.0) continue;  // the last batch already reached this slice
+                const bool lastSlice = s + 1 == sliceCount;
+                if (request.timeLimit <= 0.0 && !(lastSlice && renderer.stats().samplesPerPixel == 0))
+                    continue;  // the last batch (or the pilot) already reached this slice
+                // A pilot that used the whole budget still gets one batch, so its method shows
+                // up, late, in the plot and the table.
+                if (request.timeLimit <= 0.0) request.spp = 1, request.timeLimit = 0.0;
             } else {
                 request.spp = o.sppList[s] - renderer.stats().samplesPerPixel;
             }
@@ -247,13 +252,34 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
     md += o.timeBudget > 0.0 ? fmt::format("Equal render time: {:g} s per method in {} doubling slices.\n\n",
                                            o.timeBudget, o.slices)
                              : "Equal sample counts per slice.\n\n";
-    md += "| method | spp | GPU s | wall s | RMSE | relMSE | rel. bias | slope | late slope | to relMSE 1e-2 | to 1e-3 "
-          "| non-finite |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    md += "| method | spp | GPU s | wall s | RMSE | relMSE | work x relMSE | rel. bias | slope | late slope | to relMSE 1e-2 "
+          "| to 1e-3 | non-finite |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    auto workTimesMse = [](const MethodSummary& m) { return m.last.gpuSeconds * m.last.error.relMse; };
     for (const auto& m : report.methods)
-        md += fmt::format("| {} | {} | {:.3f} | {:.3f} | {:.4g} | {:.4g} | {:+.3g} | {:.2f} | {:.2f} | {} | {} | {} |\n",
+        md += fmt::format("| {} | {} | {:.3f} | {:.3f} | {:.4g} | {:.4g} | {:.3g} | {:+.3g} | {:.2f} | {:.2f} | {} | {} | {} |\n",
                           m.method.label, m.last.spp, m.last.gpuSeconds, m.last.wallSeconds, m.last.error.rmse,
-                          m.last.error.relMse, m.last.error.relMeanError, m.slope, m.slopeLateHalf,
+                          m.last.error.relMse, workTimesMse(m), m.last.error.relMeanError, m.slope, m.slopeLateHalf,
                           formatSeconds(m.secondsTo1e2), formatSeconds(m.secondsTo1e3), m.nonFiniteSamples);
+
+    // ---- Auto pmf against the fixed defaults at the same base level ----
+    std::string autoLines;
+    for (const auto& a : report.methods) {
+        const size_t at = a.method.label.find("_auto:");
+        if (at == std::string::npos) continue;
+        const std::string family = a.method.label.substr(0, at), level = a.method.label.substr(at + 5);
+        for (const auto& d : report.methods) {
+            if (&d == &a || d.method.label.rfind(family, 0) != 0 || d.method.label.find("_auto:") != std::string::npos ||
+                d.method.label.size() < level.size() ||
+                d.method.label.compare(d.method.label.size() - level.size(), level.size(), level) != 0)
+                continue;
+            const double ratio = workTimesMse(a) / workTimesMse(d);
+            autoLines += fmt::format("- {} vs {}: work x relMSE ratio {:.3f} ({})\n", a.method.label, d.method.label,
+                                     ratio, ratio < 0.9 ? "auto wins" : ratio <= 1.1 ? "within 10%" : "auto loses");
+        }
+    }
+    if (!autoLines.empty())
+        md += "\nAuto pmf against the fixed defaults (GPU time x relative MSE at the end of the budget, pilot "
+              "included; below 1 is better):\n\n" + autoLines;
     md += "\nMethods:\n\n";
     for (const auto& m : report.methods)
         md += fmt::format("- **{}**: {}. {}\n", m.method.label, m.method.description, m.estimator);
