@@ -1,7 +1,7 @@
 // hash_grid_build: the photon hash grid on the device, one stage per pipeline (kSpecGridStage):
 // clear the per-bucket counts, count photons per bucket, exclusive prefix sum of the counts
-// (1024-element blocks, block totals scanned recursively, then added back), and scatter photon
-// indices into bucket order. After the scatter cellStart[h] holds the END of bucket h's range,
+// (1024-element blocks, block totals scanned recursively, then added back), and scatter copies of
+// the photons into bucket order (so that a gather reads each bucket contiguously). After the scatter cellStart[h] holds the END of bucket h's range,
 // which starts at cellStart[h] - cellCount[h]. The query stage evaluates gatherPhotons() at
 // given points (tests). Loops are grid-stride: the host dispatches for the capacity.
 #version 460
@@ -81,8 +81,11 @@ void main() {
         UintArrayRef sums = UintArrayRef(uvec2(pc.sumsLo, pc.sumsHi));
         for (uint i = id; i < pc.count; i += threadCount()) dst.v[i] += sums.v[i / kScanBlock];
     } else if (kStage == kGridStageScatter) {
-        UintArrayRef sorted = UintArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
-        for (uint i = id; i < stored; i += threadCount()) sorted.v[atomicAdd(cellStart.v[photons.p[i].cell], 1u)] = i;
+        PhotonArrayRef sorted = PhotonArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
+        for (uint i = id; i < stored; i += threadCount()) {
+            Photon ph = photons.p[i];
+            sorted.p[atomicAdd(cellStart.v[ph.cell], 1u)] = ph;
+        }
     } else if (kStage == kGridStageQuery) {
         // Query i: src.v[2i] = (x, -), src.v[2i+1] = (n, -); out: (base.x, difference.x, found, 0)
         Vec4ArrayRef src = Vec4ArrayRef(uvec2(pc.srcLo, pc.srcHi));

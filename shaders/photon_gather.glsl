@@ -19,8 +19,7 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
     s.found = 0u;
     float cellSize = map.h.cellSize;
     uint tableSize = map.h.tableSize;
-    PhotonArrayRef photons = PhotonArrayRef(uvec2(map.h.photonsLo, map.h.photonsHi));
-    UintArrayRef sorted = UintArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
+    PhotonArrayRef sorted = PhotonArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
     UintArrayRef cellCount = UintArrayRef(uvec2(map.h.cellCountLo, map.h.cellCountHi));
     UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
     float rj2 = rb2 * exp(logRadius2);
@@ -36,7 +35,7 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
         if (seen) continue;
         uint end = cellStart.v[h];  // the scatter left the end of the bucket's range here
         for (uint i = end - cellCount.v[h]; i < end; ++i) {
-            Photon ph = photons.p[sorted.v[i]];
+            Photon ph = sorted.p[i];
             vec3 d = x - ph.position;
             float d2 = dot(d, d);
             if (!(d2 < rb2)) continue;

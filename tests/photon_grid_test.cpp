@@ -105,6 +105,6 @@ TEST_F(PhotonGrid, MatchesBruteForceForEveryKernel) {
 }
 
 TEST_F(PhotonGrid, ThreeScanLevels) {
-    // 1.5 M photons: a table of 2^21 buckets, scanned in three levels (2^21, 2048, 2).
-    compareWithBruteForce(1500000, 4.0f, 0.02f, kKernelCone, 64, 23);
+    // 2.5 M photons: a table of 2^21 buckets, scanned in three levels (2^21, 2048, 2).
+    compareWithBruteForce(2500000, 4.0f, 0.02f, kKernelCone, 64, 23);
 }

@@ -171,7 +171,7 @@ CONST uint kGridStageClear = 0u;    // cellCount = 0
 CONST uint kGridStageCount = 1u;    // photon -> cell hash, cellCount[h]++
 CONST uint kGridStageScan = 2u;     // exclusive scan of 1024-element blocks, block totals out
 CONST uint kGridStageAdd = 3u;      // adds the scanned block totals back
-CONST uint kGridStageScatter = 4u;  // sortedIndex[cellStart[h]++] = photon
+CONST uint kGridStageScatter = 4u;  // sorted[cellStart[h]++] = photon (a copy, read in order by the gather)
 CONST uint kGridStageQuery = 5u;    // kernel sums at query points (tests)
 
 CONST uint kPhotonTraceGroupSize = 64u;
@@ -191,7 +191,7 @@ struct Photon {
 // grows the buffers and repeats the pass, so no photon is ever lost.
 struct PhotonMapHeader {
     uint storedCount; uint capacity; uint tableSize; float cellSize;
-    uint photonsLo; uint photonsHi; uint sortedLo; uint sortedHi;
+    uint photonsLo; uint photonsHi; uint sortedLo; uint sortedHi;  // photons as stored, and in bucket order
     uint cellCountLo; uint cellCountHi; uint cellStartLo; uint cellStartHi;
 };
 

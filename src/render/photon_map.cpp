@@ -11,9 +11,10 @@ namespace {
 constexpr uint32_t kMaxTableSize = 1u << 24;
 constexpr uint64_t kMaxGroups = 4096;  // grid-stride loops cover the rest
 
+// Buckets hold cells, and cells hold several photons: half a bucket per photon of capacity.
 uint32_t tableSizeFor(uint64_t capacity) {
     uint32_t t = 1024;
-    while (t < capacity && t < kMaxTableSize) t <<= 1;
+    while (t < capacity / 2 && t < kMaxTableSize) t <<= 1;
     return t;
 }
 uint32_t lo(VkDeviceAddress a) { return uint32_t(a); }
@@ -35,7 +36,7 @@ void PhotonMap::allocate(uint64_t capacity) {
     capacity_ = capacity;
     tableSize_ = tableSizeFor(capacity);
     photons_ = gpu::Buffer(context_, capacity * sizeof(shader::Photon), "photons");
-    sorted_ = gpu::Buffer(context_, capacity * sizeof(uint32_t), "photon indices in bucket order");
+    sorted_ = gpu::Buffer(context_, capacity * sizeof(shader::Photon), "photons in bucket order");
     cellCount_ = gpu::Buffer(context_, uint64_t(tableSize_) * 4, "hash grid bucket counts");
     cellStart_ = gpu::Buffer(context_, uint64_t(tableSize_) * 4, "hash grid bucket ends");
     // Block totals of every scan level above the table.
@@ -57,6 +58,10 @@ uint64_t PhotonMap::deviceBytes() const {
 
 void PhotonMap::reserve(uint64_t photons) {
     if (photons > capacity_) allocate(photons);
+}
+
+void PhotonMap::shrinkTo(uint64_t photons) {
+    if (photons * 3 < capacity_ * 2) allocate(std::max<uint64_t>(photons, 1));
 }
 
 void PhotonMap::beginPass(float cellSize) {

@@ -1,10 +1,10 @@
 // The photon map of one pass on the device: the photon buffer, the hash grid (per-bucket counts,
-// bucket ends after the scatter, photon indices in bucket order), the prefix-sum scratch and the
-// header through which the shaders reach all of them by device address. Owns the
+// bucket ends after the scatter, a copy of the photons in bucket order), the prefix-sum scratch
+// and the header through which the shaders reach all of them by device address. Owns the
 // hash_grid_build pipelines (one per stage of shaders/hash_grid_build.comp).
 //
-// Memory per photon: 32 bytes (Photon) + 4 (sorted index) + 8 per hash bucket, with
-// tableSize = the power of two at least the capacity (at most 2^24 buckets).
+// Memory per photon of capacity: 32 bytes (Photon) + 32 (its copy in bucket order) + 8 per hash
+// bucket, with tableSize = the power of two at least half the capacity (at most 2^24 buckets).
 #pragma once
 
 #include <cstdint>
@@ -31,6 +31,8 @@ public:
 
     // Grows the buffers to hold at least `photons` photons (contents are lost).
     void reserve(uint64_t photons);
+    // Reallocates for `photons` photons when the capacity is over 1.5 times that (contents lost).
+    void shrinkTo(uint64_t photons);
     // Writes the header for the next pass: no photons stored, the given cell size.
     void beginPass(float cellSize);
     // Photons the last pass tried to store (more than capacity() when it overflowed).

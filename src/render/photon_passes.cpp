@@ -187,13 +187,17 @@ public:
     bool batchComplete() override {
         const uint64_t stored = map_.storedCount();
         lastStored_ = stored;
-        if (stored <= map_.capacity()) return true;
+        if (stored <= map_.capacity()) {
+            map_.shrinkTo(stored + stored / 4);  // the next pass stores about as many
+            return true;
+        }
         map_.reserve(stored + stored / 4);  // the gather skipped its accumulation: repeat the pass
         return false;
     }
 
     uint64_t photonPathsLastBatch() const override { return tracePush_.pathCount; }
     uint64_t photonsStoredLastBatch() const override { return lastStored_; }
+    uint64_t deviceBytes() const override { return map_.deviceBytes(); }
 
     void recordWarmUp(gpu::CommandBatch& batch) override {
         map_.recordWarmUp(batch);

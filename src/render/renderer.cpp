@@ -93,6 +93,7 @@ void Renderer::render(const RenderRequest& request) {
         if (!passes_->batchComplete()) continue;  // nothing was accumulated: run it again
         stats_.photonPaths += passes_->photonPathsLastBatch();
         stats_.photonsStored += passes_->photonsStoredLastBatch();
+        stats_.photonMapBytes = passes_->deviceBytes();
         done += batchSamples;
         sampleIndex_ += batchSamples;
 

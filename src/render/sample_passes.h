@@ -40,6 +40,8 @@ public:
     // Photon mapping: photon paths traced and photons stored by the last complete batch.
     virtual uint64_t photonPathsLastBatch() const { return 0; }
     virtual uint64_t photonsStoredLastBatch() const { return 0; }
+    // Device memory of the integrator's own buffers (the photon map), in bytes.
+    virtual uint64_t deviceBytes() const { return 0; }
     // Empty dispatches of every pipeline: lavapipe compiles a pipeline at its first dispatch.
     virtual void recordWarmUp(gpu::CommandBatch& batch) = 0;
 };
