@@ -121,6 +121,7 @@ void main() {
     LevelPmf pmf = LevelPmf(kPmfType, kPmfR, kPmfAlpha);
 
     vec3 sumZ = vec3(0.0), sumZ2 = vec3(0.0), sumBase = vec3(0.0), sumCorrection = vec3(0.0);
+    vec3 sumCorrectionPos = vec3(0.0), sumCorrectionNeg = vec3(0.0);
     float dropped = 0.0;
     if (pc.sampleCount == 0u) return;
 
@@ -138,6 +139,8 @@ void main() {
             sumZ2 += z * z;
             sumBase += path.result.base;
             sumCorrection += path.result.correction;
+            sumCorrectionPos += max(path.result.correction, vec3(0.0));
+            sumCorrectionNeg += min(path.result.correction, vec3(0.0));
         }
         if (++s == pc.sampleCount) break;
         path = startSample(pixel, pixelIndex, s, pmf, rng);
@@ -148,4 +151,6 @@ void main() {
     accumulateAdd(accum, kChannelEstimateSq, pixelIndex, pixelCount, vec4(sumZ2, 0.0));
     accumulateAdd(accum, kChannelBase, pixelIndex, pixelCount, vec4(sumBase, 0.0));
     accumulateAdd(accum, kChannelCorrection, pixelIndex, pixelCount, vec4(sumCorrection, 0.0));
+    accumulateAdd(accum, kChannelCorrectionPositive, pixelIndex, pixelCount, vec4(sumCorrectionPos, 0.0));
+    accumulateAdd(accum, kChannelCorrectionNegative, pixelIndex, pixelCount, vec4(sumCorrectionNeg, 0.0));
 }

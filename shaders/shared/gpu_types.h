@@ -102,6 +102,7 @@ CONST uint kBindingMedia = 4u;      // MediumGpu[]
 CONST uint kBindingGridData = 5u;   // float voxel densities of every grid medium
 CONST uint kBindingPrimMedia = 6u;  // uint per prim slot: media on its two sides (kPrimMedia*)
 CONST uint kPathTraceBindingCount = 7u;  // the accumulation buffer is reached by address
+CONST uint kSceneBindingCount = 4u;      // prims, BVH, materials, lights (passes without media)
 
 // Specialisation constant ids: features a scene lacks are folded away by the compiler.
 CONST uint kSpecMaxBounces = 0u;
@@ -182,11 +183,102 @@ CONST uint kChannelEstimate = 0u;    // rgb: sum of Z; w: non-finite samples dro
 CONST uint kChannelEstimateSq = 1u;  // rgb: sum of Z^2
 CONST uint kChannelBase = 2u;        // rgb: sum of the base I(k)
 CONST uint kChannelCorrection = 3u;  // rgb: sum of the correction Z - I(k)
-CONST uint kChannelCount = 4u;
+CONST uint kChannelCorrectionPositive = 4u;  // rgb: sum of max(correction, 0)
+CONST uint kChannelCorrectionNegative = 5u;  // rgb: sum of min(correction, 0)
+CONST uint kChannelCount = 6u;
 
 SHADER_NAMESPACE_END
 #ifdef __cplusplus
 static_assert(sizeof(telescope::shader::PathTracePush) == 96);
+#endif
+
+// ---- Photon mapping passes (photon_trace, hash_grid_build, gather; ESTIMATORS.md section 3) ----
+// Specialisation ids 48..63 (32..47 belong to participating media). The photon passes also take
+// the scene switches of the path tracer (kSpecHasSpheres ... kSpecRayEpsilon, same ids). Every
+// photon buffer is reached by device address, so none is bound by the 128 MiB binding limit.
+SHADER_NAMESPACE_BEGIN
+
+CONST uint kSpecPhotonEstimator = 48u;   // kPhotonBiased or kPhotonUnbiased
+CONST uint kSpecPhotonKernel = 49u;      // kKernelCone, kKernelUniform, kKernelEpanechnikov
+CONST uint kSpecPhotonLevels = 50u;      // kPmfGeometric or kPmfPowerLaw: radius schedule and pmf
+CONST uint kSpecPhotonPmfR = 51u;
+CONST uint kSpecPhotonPmfAlpha = 52u;
+CONST uint kSpecPhotonNextEvent = 53u;   // direct light by next-event estimation, not photons
+CONST uint kSpecGridStage = 54u;         // hash_grid_build: which stage this pipeline runs
+CONST uint kSpecPhotonMaxBounces = 55u;  // scattering vertices of a photon path / camera chain
+
+CONST uint kPhotonBiased = 0u;    // K_r at the pass radius (fixed radius, or the PPM schedule)
+CONST uint kPhotonUnbiased = 1u;  // K_{r_b} + (K_{r_{j+1}} - K_{r_j}) / p(j | j >= b)
+
+CONST uint kGridStageClear = 0u;    // cellCount = 0
+CONST uint kGridStageCount = 1u;    // photon -> cell hash, cellCount[h]++
+CONST uint kGridStageScan = 2u;     // exclusive scan of 1024-element blocks, block totals out
+CONST uint kGridStageAdd = 3u;      // adds the scanned block totals back
+CONST uint kGridStageScatter = 4u;  // sorted[cellStart[h]++] = photon (a copy, read in order by the gather)
+CONST uint kGridStageQuery = 5u;    // kernel sums at query points (tests)
+
+CONST uint kPhotonTraceGroupSize = 64u;
+CONST uint kGridGroupSize = 256u;
+CONST uint kScanBlock = 1024u;      // elements per scan workgroup (4 per thread)
+CONST uint kGatherGroupSize = 8u;   // 8x8 pixel tiles
+
+// A stored photon: where it landed, where it came from (octahedral, 2 x snorm16) and its power
+// (flux per emitted path of the pass). cell is the hash bucket, written by the count stage.
+struct Photon {
+    vec3 position; uint cell;
+    vec3 power; uint direction;
+};
+
+// The photon map of one pass, in device memory, reached by address. photon_trace counts every
+// photon it stores in storedCount, also those beyond capacity (which it drops): the host then
+// grows the buffers and repeats the pass, so no photon is ever lost.
+struct PhotonMapHeader {
+    uint storedCount; uint capacity; uint tableSize; float cellSize;
+    uint photonsLo; uint photonsHi; uint sortedLo; uint sortedHi;  // photons as stored, and in bucket order
+    uint cellCountLo; uint cellCountHi; uint cellStartLo; uint cellStartHi;
+};
+
+struct PhotonTracePush {
+    uint headerLo; uint headerHi;
+    uint pathCount;   // photon paths emitted this pass
+    uint pass;        // pass index (the sample index of the render)
+    uint seed;
+    float pathScale;  // 1 / pathCount
+    uint rowThreads;  // threads per row of the 2D dispatch: path = y * rowThreads + x
+    uint pad0;
+};
+
+struct HashGridPush {
+    uint headerLo; uint headerHi;
+    uint srcLo; uint srcHi;    // scan / add / query: input array
+    uint dstLo; uint dstHi;    // scan / add / query: output array
+    uint sumsLo; uint sumsHi;  // scan: block totals out; add: scanned block totals in
+    uint count;                // scan / add: elements; query: queries
+    float radius;              // query: r_b
+    float logRadius2;          // query: ln(r_j^2 / r_b^2)
+    float logStep2;            // query: ln(r_{j+1}^2 / r_j^2)
+};
+
+struct GatherPush {
+    vec3 cameraPosition; float planeDistance;
+    vec3 cameraRight; uint width;
+    vec3 cameraUp; uint height;
+    vec3 cameraForward; uint seed;
+    uint pass;          // sample index
+    uint accumLo; uint accumHi;
+    uint headerLo; uint headerHi;
+    float radius;       // r_b: the base (largest) radius of this pass
+    float baseLevel;    // b: the level of r_b (unbiased), 1 + pass for the progressive variant
+    uint pad0;
+};
+
+SHADER_NAMESPACE_END
+#ifdef __cplusplus
+static_assert(sizeof(telescope::shader::Photon) == 32);
+static_assert(sizeof(telescope::shader::PhotonMapHeader) == 48);
+static_assert(sizeof(telescope::shader::PhotonTracePush) == 32);
+static_assert(sizeof(telescope::shader::HashGridPush) == 48);
+static_assert(sizeof(telescope::shader::GatherPush) == 96);
 #endif
 
 #endif

@@ -159,6 +159,10 @@ void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Cont
     j["setup_seconds"] = stats.setupSeconds;
     j["submits"] = stats.submits;
     j["paths_per_second"] = stats.wallSeconds > 0 ? paths / stats.wallSeconds : 0.0;
+    if (stats.photonPaths > 0) {
+        j["photon_paths"] = stats.photonPaths;
+        j["photons_stored"] = stats.photonsStored;
+    }
     j["non_finite_samples"] = film.nonFiniteSamples();
     j["validation_messages"] = context.validationMessageCount();
     j["estimator"] = renderer.plan().estimator;

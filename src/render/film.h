@@ -1,7 +1,7 @@
-// Per-pixel sums on the host, in double precision: the estimate, its square, the base and the
-// correction of every pixel, and the sample count. A Film is the exact state of a render: means,
-// variances and output images derive from it, and two films of one scene with different seeds
-// merge by adding sums.
+// Per-pixel sums on the host, in double precision: the estimate, its square, the base, the
+// correction and its positive and negative parts of every pixel, and the sample count. A Film is
+// the exact state of a render: means, variances and output images derive from it, and two films
+// of one scene with different seeds merge by adding sums.
 #pragma once
 
 #include <array>

@@ -50,10 +50,12 @@ float srgbEncode(float linear) {
 
 void writeExr(const std::string& path, const Film& film, const ImageMetadata& metadata) {
     using namespace shader;
-    const int channels = 12;
+    const int channels = 18;
     OIIO::ImageSpec spec(int(film.width()), int(film.height()), channels, OIIO::TypeDesc::FLOAT);
     spec.channelnames = {"R", "G", "B", "base.R", "base.G", "base.B",
-                         "correction.R", "correction.G", "correction.B", "variance.R", "variance.G", "variance.B"};
+                         "correction.R", "correction.G", "correction.B", "variance.R", "variance.G", "variance.B",
+                         "correction_positive.R", "correction_positive.G", "correction_positive.B",
+                         "correction_negative.R", "correction_negative.G", "correction_negative.B"};
     spec.attribute("compression", "zip");
     for (const auto& [key, value] : metadata.entries) spec.attribute(key, value);
 
@@ -63,12 +65,16 @@ void writeExr(const std::string& path, const Film& film, const ImageMetadata& me
         glm::dvec3 corr = film.mean(kChannelCorrection, i);
         glm::dvec3 est = film.mean(kChannelEstimate, i);
         glm::dvec3 var = film.varianceOfMean(i);
+        glm::dvec3 pos = film.mean(kChannelCorrectionPositive, i);
+        glm::dvec3 neg = film.mean(kChannelCorrectionNegative, i);
         float* px = &data[i * channels];
         for (int c = 0; c < 3; ++c) {
             px[c] = float(est[c]);
             px[3 + c] = float(base[c]);
             px[6 + c] = float(corr[c]);
             px[9 + c] = float(var[c]);
+            px[12 + c] = float(pos[c]);
+            px[15 + c] = float(neg[c]);
         }
     }
     writeImage(path, spec, OIIO::TypeDesc::FLOAT, data.data());

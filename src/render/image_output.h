@@ -1,4 +1,5 @@
-// Writes a Film as a float EXR (estimate, base, correction and variance channels, with the
+// Writes a Film as a float EXR (estimate, base, correction, variance, and the positive and negative
+// parts of the correction (the paper's teaser decomposition), with the
 // render's settings in the metadata) and a tone-mapped PNG preview. Files are written to a
 // temporary name and renamed, so a failed write leaves no half-written output.
 #pragma once

@@ -35,7 +35,9 @@ struct RenderPlan {
     std::vector<PlannedPass> passes;     // in dispatch order, per batch of samples
     std::vector<SkippedPass> skipped;
     std::vector<FeatureSwitch> features;
-    std::vector<gpu::SpecConstant> pathTraceSpec;
+    std::vector<gpu::SpecConstant> pathTraceSpec;  // path_trace
+    std::vector<gpu::SpecConstant> photonSpec;     // photon_trace and gather
+    std::string featuresOf = "path_trace";         // the pipeline(s) the feature switches describe
     std::string estimator;               // one line describing the estimator
     LevelSchedule levelSchedule = LevelSchedule::PerPixel;  // as run (per_pixel unless debiased)
 };
@@ -46,5 +48,8 @@ RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& features);
 std::string describePlan(const Scene& scene, const RenderPlan& plan);
 
 std::string pmfDescription(const PmfSettings& pmf);
+
+// The reconstruction filter as the camera passes see it (kFilter*).
+uint32_t filterConstant(const Camera& camera);
 
 }  // namespace telescope

@@ -1,5 +1,9 @@
 // Schedules the passes of a plan on the device and accumulates samples into a Film.
 //
+// The integrator contributes its passes (SamplePasses: path_trace, or photon_trace,
+// hash_grid_build and gather); the Renderer batches their units into submits, times every
+// dispatch by name and stops at a sample count or a time limit.
+//
 // A Renderer owns the scene buffers, the accumulation buffer and the pipelines. render() may be
 // called repeatedly: samples continue from where the last call stopped (their random numbers
 // depend only on pixel, global sample index and seed), so a render can be extended, and renders
@@ -19,8 +23,8 @@
 #include "render/film.h"
 #include "render/gpu_scene.h"
 #include "render/render_plan.h"
+#include "render/sample_passes.h"
 #include "scene/scene.h"
-#include "shared/gpu_types.h"
 
 namespace telescope {
 
@@ -48,6 +52,9 @@ struct RenderStats {
     double setupSeconds = 0.0;  // scene upload and pipeline creation
     uint64_t samplesPerPixel = 0;
     uint64_t submits = 0;
+    uint64_t photonPaths = 0;    // photon mapping: photon paths traced, all passes
+    uint64_t photonsStored = 0;  // photon mapping: photons stored, all passes
+    uint64_t photonMapBytes = 0; // photon mapping: device memory of the photon map now
     std::map<std::string, PassStats> passes;
 };
 
@@ -67,11 +74,6 @@ public:
     uint32_t seed() const { return seed_; }
 
 private:
-    uint32_t samplesPerDispatch() const;
-    // Records the passes of one step of samples (one dispatch, or five in the queued schedule).
-    void recordStep(const shader::PathTracePush& push, uint32_t groupsX, uint32_t groupsY);
-    uint32_t passesPerStep() const { return levelCount_ ? 5u : 1u; }
-
     gpu::Context& context_;
     const Scene& scene_;
     uint32_t seed_;
@@ -79,11 +81,7 @@ private:
     RenderPlan plan_;
     gpu::Buffer prims_, nodes_, materials_, lights_, accum_;
     gpu::Buffer media_, gridData_, primMedia_;  // participating media (dummies without)
-    std::unique_ptr<gpu::ComputePipeline> pathTrace_;
-    // Queued level schedule only (RenderPlan::levelSchedule): the level queue and its passes.
-    std::unique_ptr<gpu::ComputePipeline> levelCount_, levelScan_, levelScatter_, pathResolve_;
-    gpu::Buffer levelQueue_;
-    uint32_t queueCapacity_ = 0;
+    std::unique_ptr<SamplePasses> passes_;  // the integrator's passes
     std::unique_ptr<gpu::CommandBatch> batch_;
     uint64_t sampleIndex_ = 0;  // next global sample index
     RenderStats stats_;

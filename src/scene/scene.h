@@ -138,7 +138,19 @@ struct TransmittanceEstimatorSettings {
     PmfSettings pmf;     // debiased: geometric or power law (levels above k)
 };
 
-enum class IntegratorType : uint32_t { PathTracer = 0 };
+enum class IntegratorType : uint32_t { PathTracer = 0, PhotonMap = 1, ProgressivePhotonMap = 2 };
+
+// Photon mapping (ESTIMATORS.md section 3). Tungsten's key names where Tungsten has the setting.
+enum class PhotonKernel : uint32_t { Cone = 0, Uniform = 1, Epanechnikov = 2 };
+enum class DirectLighting : uint32_t { Photons = 0, NextEvent = 1 };
+
+struct PhotonSettings {
+    uint32_t photonCount = 1000000;   // photon paths emitted per pass ("photon_count")
+    float gatherRadius = 0.0f;        // r_1 (unbiased), r (biased), r_0 (progressive); "gather_radius"
+    float alpha = 2.0f / 3.0f;        // progressive radius schedule (Knaus & Zwicker); "alpha"
+    PhotonKernel kernel = PhotonKernel::Cone;             // "kernel"
+    DirectLighting directLighting = DirectLighting::NextEvent;  // "direct_lighting"
+};
 
 struct IntegratorSettings {
     IntegratorType type = IntegratorType::PathTracer;
@@ -149,10 +161,13 @@ struct IntegratorSettings {
     DebiasSettings debias;
     // "transmittance_estimator": how every transmittance factor of a path is estimated.
     TransmittanceEstimatorSettings transmittance;
+    PhotonSettings photon;  // photon_map and progressive_photon_map only
     // Set by the pmf pilot only (not a scene key): every sample takes this level and records the
     // unweighted correction D_j instead of its estimate, with no base.
     uint32_t pilotLevel = kNoPilotLevel;
 };
+
+inline bool usesPhotons(const IntegratorSettings& s) { return s.type != IntegratorType::PathTracer; }
 
 struct RendererSettings {
     uint32_t spp = 32;

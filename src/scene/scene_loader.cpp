@@ -36,6 +36,7 @@ constexpr float kPi = 3.14159265358979323846f;
 constexpr uint32_t kMaxResolution = 16384;
 constexpr uint32_t kMaxBounces = 1024;
 constexpr uint32_t kMaxSpp = 1u << 24;
+constexpr uint32_t kMaxPhotonCount = 1u << 27;  // photon paths per pass (4 GiB of photons at 32 bytes)
 
 // Tungsten types that exist but Telescope does not implement (yet)
 constexpr std::string_view kUnsupportedBsdfs[] = {
@@ -46,7 +47,7 @@ constexpr std::string_view kUnsupportedPrimitives[] = {
     "curves", "cylinder", "instances", "infinite_sphere_cap", "minecraft_map", "skydome", "spot"};
 constexpr std::string_view kUnsupportedCameras[] = {"thinlens", "equirectangular", "cubemap"};
 constexpr std::string_view kUnsupportedIntegrators[] = {
-    "photon_map", "progressive_photon_map", "bidirectional_path_tracer", "light_tracer",
+    "bidirectional_path_tracer", "light_tracer",
     "kelemen_mlt", "multiplexed_mlt", "reversible_jump_mlt"};
 constexpr std::string_view kFilters[] = {
     "dirac", "box", "tent", "gaussian", "mitchell_netravali", "catmull_rom", "lanczos"};
@@ -218,6 +219,7 @@ private:
     void readCamera(const json& v);
     void readIntegrator(const json& v);
     void readDebias(const json& v, const std::string& key);
+    void readPhotonSettings(const json& v, const std::string& key);
     void readRenderer(const json& v);
 
     // Participating media (docs/MEDIA.md)
@@ -730,6 +732,11 @@ void SceneReader::readIntegrator(const json& v) {
 
     const std::string type = find(v, "type") ? string(v["type"], "integrator.type") : "path_tracer";
     if (isOneOf(kUnsupportedIntegrators, type)) fail("integrator.type", fmt::format("unsupported integrator type '{}'", type));
+    if (type == "photon_map" || type == "progressive_photon_map") {
+        s.type = type == "photon_map" ? IntegratorType::PhotonMap : IntegratorType::ProgressivePhotonMap;
+        readPhotonSettings(v, key);
+        return;
+    }
     if (type != "path_tracer") fail("integrator.type", fmt::format("unknown integrator type '{}'", type));
     s.type = IntegratorType::PathTracer;
 
@@ -744,6 +751,65 @@ void SceneReader::readIntegrator(const json& v) {
 
     ignoreUnread(v, key, {"type", "min_bounces", "max_bounces", "enable_light_sampling", "enable_two_sided_shading", "debias",
                           "transmittance_estimator"});
+}
+
+// photon_map and progressive_photon_map: Tungsten's keys (photon_count, gather_radius, alpha,
+// max_bounces) plus Telescope's debias, direct_lighting and kernel. The gather radius is
+// required: Tungsten's default (1e30 with a k-nearest-neighbour cap) has no meaning for the
+// fixed-radius estimators here.
+void SceneReader::readPhotonSettings(const json& v, const std::string& key) {
+    IntegratorSettings& s = scene_.integrator;
+    PhotonSettings& p = s.photon;
+    const std::string type = string(v["type"], "integrator.type");
+    for (const PointLikeLight& l : scene_.lights)
+        if (l.type == LightType::Environment)
+            fail("integrator.type", fmt::format("'{}' does not support infinite_sphere emitters (light '{}')", type, l.name));
+
+    if (const json* n = find(v, "min_bounces"); n && integer(*n, "integrator.min_bounces", 0, kMaxBounces) != 0)
+        fail("integrator.min_bounces", "photon mapping supports only min_bounces = 0");
+    if (const json* n = find(v, "max_bounces")) s.maxBounces = integer(*n, "integrator.max_bounces", 0, kMaxBounces);
+    if (const json* b = find(v, "enable_two_sided_shading"))
+        s.enableTwoSidedShading = boolean(*b, "integrator.enable_two_sided_shading");
+    if (const json* n = find(v, "photon_count"))
+        p.photonCount = integer(*n, "integrator.photon_count", 1, kMaxPhotonCount);
+
+    const json* radius = find(v, "gather_radius");
+    if (!radius) fail("integrator.gather_radius", fmt::format("missing: '{}' needs a gather radius in scene units", type));
+    p.gatherRadius = number(*radius, "integrator.gather_radius");
+    if (!(p.gatherRadius > 0.0f)) fail("integrator.gather_radius", fmt::format("must be positive, got {}", p.gatherRadius));
+
+    if (const json* a = find(v, "alpha")) {
+        p.alpha = number(*a, "integrator.alpha");
+        if (!(p.alpha > 0.0f && p.alpha < 1.0f)) fail("integrator.alpha", fmt::format("alpha must be in (0, 1), got {}", p.alpha));
+    }
+    if (const json* k = find(v, "kernel")) {
+        const std::string name = string(*k, "integrator.kernel");
+        if (name == "cone") p.kernel = PhotonKernel::Cone;
+        else if (name == "uniform") p.kernel = PhotonKernel::Uniform;
+        else if (name == "epanechnikov") p.kernel = PhotonKernel::Epanechnikov;
+        else fail("integrator.kernel", fmt::format("unknown kernel '{}' (expected \"cone\", \"uniform\" or \"epanechnikov\")", name));
+    }
+    if (const json* d = find(v, "direct_lighting")) {
+        const std::string name = string(*d, "integrator.direct_lighting");
+        if (name == "photons") p.directLighting = DirectLighting::Photons;
+        else if (name == "next_event") p.directLighting = DirectLighting::NextEvent;
+        else fail("integrator.direct_lighting",
+                  fmt::format("unknown direct lighting '{}' (expected \"photons\" or \"next_event\")", name));
+    }
+    if (const json* d = find(v, "debias"); d && !d->is_null()) {
+        readDebias(*d, "integrator.debias");
+        if (s.debias.estimator != DebiasEstimator::SingleTerm)
+            fail("integrator.debias.estimator", "photon mapping supports only the \"single_term\" estimator");
+        if (s.debias.pmf.type == PmfType::Auto)
+            fail("integrator.debias.pmf.type", "photon mapping does not support the \"auto\" pmf (no pilot for photons)");
+        // Without a pmf: the power-law levels of the PPM radius schedule, with the integrator's alpha.
+        if (!d->contains("pmf")) {
+            s.debias.pmf.type = PmfType::PowerLaw;
+            s.debias.pmf.alpha = p.alpha;
+        }
+    }
+    ignoreUnread(v, key, {"type", "min_bounces", "max_bounces", "enable_two_sided_shading", "photon_count",
+                          "gather_radius", "alpha", "kernel", "direct_lighting", "debias"});
 }
 
 // Telescope's own block, read strictly: every key must be known.
@@ -1078,6 +1144,8 @@ void SceneReader::readTransmittanceEstimator(const json& v, const std::string& k
 
 // The trackers and unbiased ray marching estimate exp(-tau) only.
 void SceneReader::checkEstimatorFitsMedia(const json& doc) const {
+    if (usesPhotons(scene_.integrator) && !scene_.media.empty())
+        fail("integrator.type", "participating media are rendered by the path_tracer integrator only, not by photon mapping");
     const TransmittanceEstimatorType t = scene_.integrator.transmittance.type;
     if (t == TransmittanceEstimatorType::RayMarch || t == TransmittanceEstimatorType::DebiasedRayMarch) return;
     for (size_t i = 0; i < scene_.media.size(); ++i)

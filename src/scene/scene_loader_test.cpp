@@ -364,6 +364,30 @@ TEST(SceneLoader, DebiasSettings) {
     EXPECT_FLOAT_EQ(s.integrator.debias.pmf.r, 0.65f);
 }
 
+TEST(SceneLoader, PhotonMapSettings) {
+    Scene s = load(R"({"integrator": {"type": "photon_map", "photon_count": 5000, "gather_radius": 0.25,
+        "max_bounces": 7, "kernel": "epanechnikov", "direct_lighting": "photons", "gather_photon_count": 20}})");
+    EXPECT_EQ(s.integrator.type, IntegratorType::PhotonMap);
+    EXPECT_TRUE(usesPhotons(s.integrator));
+    EXPECT_EQ(s.integrator.photon.photonCount, 5000u);
+    EXPECT_FLOAT_EQ(s.integrator.photon.gatherRadius, 0.25f);
+    EXPECT_EQ(s.integrator.maxBounces, 7u);
+    EXPECT_EQ(s.integrator.photon.kernel, PhotonKernel::Epanechnikov);
+    EXPECT_EQ(s.integrator.photon.directLighting, DirectLighting::Photons);
+    EXPECT_EQ(s.integrator.debias.estimator, DebiasEstimator::None);
+    ASSERT_EQ(s.ignoredKeys.size(), 1u);  // Tungsten's k-NN count is not used
+    EXPECT_EQ(s.ignoredKeys[0], "integrator.gather_photon_count");
+
+    // A debias block without a pmf takes the power-law levels of the radius schedule.
+    s = load(R"({"integrator": {"type": "progressive_photon_map", "gather_radius": 0.1, "alpha": 0.5,
+        "debias": {"estimator": "single_term"}}})");
+    EXPECT_EQ(s.integrator.type, IntegratorType::ProgressivePhotonMap);
+    EXPECT_EQ(s.integrator.photon.kernel, PhotonKernel::Cone);
+    EXPECT_EQ(s.integrator.photon.directLighting, DirectLighting::NextEvent);
+    EXPECT_EQ(s.integrator.debias.pmf.type, PmfType::PowerLaw);
+    EXPECT_FLOAT_EQ(s.integrator.debias.pmf.alpha, 0.5f);
+}
+
 // ---- Overrides ----
 
 TEST(SceneOverrides, ParseSplitsAtTheFirstEquals) {
@@ -470,7 +494,17 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"MaxBouncesString", R"({"integrator": {"max_bounces": "64"}})", "", "integrator.max_bounces", "expected an integer"},
         BadInput{"MaxBouncesTooLarge", R"({"integrator": {"max_bounces": 5000}})", "", "integrator.max_bounces", "expected an integer in [0, 1024]"},
         BadInput{"LightSamplingNotBool", R"({"integrator": {"enable_light_sampling": 1}})", "", "integrator.enable_light_sampling", "true or false"},
-        BadInput{"UnsupportedIntegrator", R"({"integrator": {"type": "photon_map"}})", "", "integrator.type", "unsupported integrator type 'photon_map'"},
+        BadInput{"UnsupportedIntegrator", R"({"integrator": {"type": "light_tracer"}})", "", "integrator.type", "unsupported integrator type 'light_tracer'"},
+        BadInput{"PhotonMapWithoutRadius", R"({"integrator": {"type": "photon_map"}})", "", "integrator.gather_radius", "missing"},
+        BadInput{"PhotonRadiusNegative", R"({"integrator": {"type": "photon_map", "gather_radius": -1}})", "", "integrator.gather_radius", "must be positive"},
+        BadInput{"PhotonCountZero", R"({"integrator": {"type": "photon_map", "gather_radius": 0.1, "photon_count": 0}})", "", "integrator.photon_count", "expected an integer"},
+        BadInput{"PhotonCountHuge", R"({"integrator": {"type": "photon_map", "gather_radius": 0.1, "photon_count": 1e10}})", "", "integrator.photon_count", "expected an integer"},
+        BadInput{"PhotonAlphaOutOfRange", R"({"integrator": {"type": "progressive_photon_map", "gather_radius": 0.1, "alpha": 1.5}})", "", "integrator.alpha", "(0, 1)"},
+        BadInput{"PhotonUnknownKernel", R"({"integrator": {"type": "photon_map", "gather_radius": 0.1, "kernel": "gauss"}})", "", "integrator.kernel", "unknown kernel 'gauss'"},
+        BadInput{"PhotonUnknownDirectLighting", R"({"integrator": {"type": "photon_map", "gather_radius": 0.1, "direct_lighting": "mis"}})", "", "integrator.direct_lighting", "unknown direct lighting"},
+        BadInput{"PhotonSumEstimator", R"({"integrator": {"type": "photon_map", "gather_radius": 0.1, "debias": {"estimator": "sum"}}})", "", "integrator.debias.estimator", "single_term"},
+        BadInput{"PhotonAutoPmf", R"({"integrator": {"type": "photon_map", "gather_radius": 0.1, "debias": {"estimator": "single_term", "pmf": {"type": "auto"}}}})", "", "integrator.debias.pmf.type", "auto"},
+        BadInput{"PhotonMinBounces", R"({"integrator": {"type": "photon_map", "gather_radius": 0.1, "min_bounces": 2}})", "", "integrator.min_bounces", "min_bounces = 0"},
         BadInput{"PmfROutOfRange", R"({"integrator": {"debias": {"estimator": "sum", "pmf": {"type": "geometric", "r": 1.0}}}})", "", "integrator.debias.pmf.r", "(0, 1)"},
         BadInput{"PmfAlphaOutOfRange", R"({"integrator": {"debias": {"estimator": "sum", "pmf": {"type": "power_law", "alpha": 0}}}})", "", "integrator.debias.pmf.alpha", "(0, 1)"},
         BadInput{"PmfKeyOfOtherType", R"({"integrator": {"debias": {"estimator": "sum", "pmf": {"type": "geometric", "alpha": 0.5}}}})", "", "integrator.debias.pmf.alpha", "unknown key"},

@@ -1,0 +1,49 @@
+// The photon-map lookup (GLSL only; after the PhotonMapRef declarations): ONE traversal of the
+// 2x2x2 cells around x accumulates, from the same photons, the kernel sum at r_b and the
+// closed-form difference K_{r_{j+1}} - K_{r_j} (shared/photon_density.h). Photons arriving from
+// behind the surface (dot(w_i, n) <= 0) are rejected.
+
+struct GatherSums {
+    vec3 base;        // sum Phi_i W_{r_b}
+    vec3 difference;  // sum Phi_i (W_{r_{j+1}} - W_{r_j})
+    uint found;       // photons within r_b on the front side
+};
+
+// rb2 = r_b^2; logRadius2 = ln(r_j^2 / r_b^2), logStep2 = ln(r_{j+1}^2 / r_j^2); no difference
+// when difference is false.
+GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool difference, float logRadius2,
+                         float logStep2, uint kernel) {
+    GatherSums s;
+    s.base = vec3(0.0);
+    s.difference = vec3(0.0);
+    s.found = 0u;
+    float cellSize = map.h.cellSize;
+    uint tableSize = map.h.tableSize;
+    PhotonArrayRef sorted = PhotonArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
+    UintArrayRef cellCount = UintArrayRef(uvec2(map.h.cellCountLo, map.h.cellCountHi));
+    UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
+    float rj2 = rb2 * exp(logRadius2);
+
+    ivec3 low = gridNeighbourhood(x, cellSize);
+    uint visited[8];
+    for (uint c = 0u; c < 8u; ++c) {
+        uint h = gridHash(low + ivec3(int(c & 1u), int((c >> 1u) & 1u), int(c >> 2u)), tableSize);
+        // Two cells of the neighbourhood may share a bucket: visit each bucket once.
+        bool seen = false;
+        for (uint k = 0u; k < c; ++k) seen = seen || visited[k] == h;
+        visited[c] = h;
+        if (seen) continue;
+        uint end = cellStart.v[h];  // the scatter left the end of the bucket's range here
+        for (uint i = end - cellCount.v[h]; i < end; ++i) {
+            Photon ph = sorted.p[i];
+            vec3 d = x - ph.position;
+            float d2 = dot(d, d);
+            if (!(d2 < rb2)) continue;
+            if (dot(decodeDirection(ph.direction), n) <= 0.0) continue;
+            s.found += 1u;
+            s.base += ph.power * kernelWeight(kernel, d2, rb2);
+            if (difference && d2 < rj2) s.difference += ph.power * kernelDifference(kernel, d2, rj2, logStep2);
+        }
+    }
+    return s;
+}

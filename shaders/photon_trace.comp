@@ -1,0 +1,90 @@
+// photon_trace: one thread per photon path. A light is picked in proportion to its power, a
+// photon leaves it with power Phi / (p(light) N), follows mirror and dielectric bounces, and is
+// stored at every diffuse hit (from the second vertex on when direct light comes from next-event
+// estimation), then continues by cosine sampling with Russian roulette on its throughput.
+// Photons reaching vertex v carry light with v bounces at the gather; vertices beyond
+// max_bounces are not stored.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+
+#include "shared/gpu_types.h"
+#include "shared/rng.h"
+#include "shared/sampling.h"
+#include "shared/photon_density.h"
+#include "photon_scene.glsl"
+
+layout(local_size_x = kPhotonTraceGroupSize) in;
+layout(push_constant) uniform Push { PhotonTracePush pc; };
+
+// Emission: origin, direction and power of a photon leaving a light picked by power.
+void emitPhoton(inout Rng rng, out vec3 origin, out vec3 dir, out vec3 power) {
+    uint li = pickLight(rngNext(rng));
+    LightGpu light = lights[li];
+    float u1 = rngNext(rng), u2 = rngNext(rng), u3 = rngNext(rng), u4 = rngNext(rng);
+    if (light.type == kLightPoint) {
+        // Intensity I: flux 4 pi I, uniform directions.
+        origin = light.position;
+        dir = sampleUniformSphere(u1, u2);
+        power = light.radiance * (4.0 * kPi / light.pmf) * pc.pathScale;
+        return;
+    }
+    // Area light of radiance L: flux pi A L, uniform points, cosine-distributed directions.
+    Prim pr = prims[light.prim];
+    vec3 q, nq;
+    sampleLightPoint(pr, u1, u2, q, nq);
+    dir = sampleCosineHemisphere(nq, u3, u4);
+    origin = offsetRayOrigin(q, nq, dir);
+    power = light.radiance * (kPi * pr.area / light.pmf) * pc.pathScale;
+}
+
+void storePhoton(PhotonMapRef map, vec3 p, vec3 wi, vec3 power) {
+    uint slot = atomicAdd(map.h.storedCount, 1u);
+    if (slot >= map.h.capacity) return;  // counted: the host grows the buffer and repeats the pass
+    PhotonArrayRef photons = PhotonArrayRef(uvec2(map.h.photonsLo, map.h.photonsHi));
+    photons.p[slot] = Photon(p, 0u, power, encodeDirection(wi));
+}
+
+void main() {
+    uint path = gl_GlobalInvocationID.y * pc.rowThreads + gl_GlobalInvocationID.x;
+    if (path >= pc.pathCount || kLightCount == 0u) return;
+    PhotonMapRef map = PhotonMapRef(uvec2(pc.headerLo, pc.headerHi));
+    Rng rng = rngCreate(path, pc.pass, pc.seed ^ 0x5bd1e995u);
+
+    vec3 origin, dir, power;
+    emitPhoton(rng, origin, dir, power);
+    for (uint v = 1u; v <= kPhotonMaxBounces; ++v) {
+        Hit hit;
+        if (!traceClosest(origin, dir, kInfinity, hit)) return;
+        Prim pr = prims[hit.prim];
+        vec3 p = origin + dir * hit.t;
+        vec3 ng = pr.n;
+        if (kHasSpheres && pr.type == kPrimSphere) {
+            ng = normalize(p - pr.p0);
+            p = pr.p0 + ng * pr.p1.x;
+        }
+        MaterialGpu m = materials[pr.material];
+        bool front = dot(dir, ng) < 0.0;
+        vec3 n = front ? ng : -ng;  // faces the incoming photon
+
+        // ---- Scatter: store at diffuse vertices, then continue ----
+        vec3 scale;
+        if (m.type == kBsdfLambert) {
+            if (!front && !kTwoSided) return;
+            if (!kNextEvent || v > 1u) storePhoton(map, p, -dir, power);
+            dir = sampleCosineHemisphere(n, rngNext(rng), rngNext(rng));
+            if (dot(dir, n) <= 0.0) return;
+            scale = m.albedo;
+        } else if (kHasSpecular && (m.type == kBsdfMirror || m.type == kBsdfDielectric)) {
+            scale = scatterSpecular(m, front, n, dir, rng);
+        } else {
+            return;  // null: black and opaque
+        }
+
+        // ---- Russian roulette on the throughput factor of this vertex ----
+        float q = min(maxComponent(scale), 1.0);
+        if (!(q > 0.0)) return;
+        if (q < 1.0 && rngNext(rng) >= q) return;
+        power *= scale / q;
+        origin = offsetRayOrigin(p, ng, dir);
+    }
+}

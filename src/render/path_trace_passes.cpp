@@ -1,0 +1,233 @@
+// The path tracer's passes: one path_trace dispatch per unit, several samples per pixel each.
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <glm/gtc/constants.hpp>
+
+#include "render/sample_passes.h"
+#include "shared/gpu_types.h"
+
+namespace telescope {
+
+// ---- Plan ----
+namespace {
+// The transmittance model type every medium shares (simple models only), else 0xffffffff: a
+// specialisation constant that keeps only that model's code in path_trace.
+uint32_t sharedTransmittanceModel(const Scene& scene) {
+    if (scene.media.empty()) return 0;
+    const uint32_t type = scene.media[0].transmittance.type;
+    for (const Medium& m : scene.media)
+        if (m.transmittance.type != type) return 0xffffffffu;
+    return type == shader::kTrInterpolated ? 0xffffffffu : type;
+}
+}  // namespace
+
+void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
+    using namespace shader;
+    const IntegratorSettings& in = scene.integrator;
+
+    plan.passes.push_back({"path_trace", "path_trace",
+                           "integrator 'path_tracer': camera paths with next-event estimation and MIS, "
+                           "accumulated per pixel"});
+    plan.skipped.push_back({"photon_trace, hash_grid_build, gather", "the integrator does not use photons"});
+    if (f.media) {
+        // ---- Participating media (docs/MEDIA.md): inside path_trace, folded out without media ----
+        const auto& t = in.transmittance;
+        std::string how = transmittanceEstimatorName(t.type);
+        if (t.type == TransmittanceEstimatorType::RayMarch) how += fmt::format(" (2^{} points, biased)", t.level);
+        if (t.type == TransmittanceEstimatorType::DebiasedRayMarch)
+            how += fmt::format(" (base level {}, {})", t.level, pmfDescription(t.pmf));
+        plan.passes.back().why += fmt::format("; volumetric path tracing through {} medi{} (single and multiple "
+                                              "scattering, next-event estimation), every transmittance by {}",
+                                              f.mediumCount, f.mediumCount == 1 ? "um" : "a", how);
+    }
+
+    // ---- Level schedule: only a debiased render (not the pilot) has levels to schedule ----
+    if (in.debias.estimator != DebiasEstimator::None && in.pilotLevel == kNoPilotLevel)
+        plan.levelSchedule = in.debias.schedule;
+    if (plan.levelSchedule == LevelSchedule::Queued) {
+        plan.passes.insert(plan.passes.begin(),
+                           {{"level_count", "level_count", "level_schedule 'queued': histogram of the drawn levels"},
+                            {"level_scan", "level_scan", "prefix sum of the level histogram"},
+                            {"level_scatter", "level_scatter", "(pixel, sample) items sorted by level into a queue"}});
+        plan.passes.back().why += "; lanes take items from the level queue";
+        plan.passes.push_back({"path_resolve", "path_resolve", "accumulates the queued results per pixel in sample order"});
+    }
+
+    // ---- Estimator ----
+    if (in.debias.estimator != DebiasEstimator::None && in.debias.pmf.type == PmfType::Auto)
+        plan.passes.insert(plan.passes.begin(),
+                           {"pmf_pilot", "path_trace",
+                            fmt::format("pmf 'auto': before the render, {} spp at each of {} fixed levels measure the "
+                                        "second moment and cost of the correction",
+                                        in.debias.pmf.pilotSpp, in.debias.pmf.pilotLevels)});
+    if (in.pilotLevel != kNoPilotLevel) {
+        plan.estimator = fmt::format("pmf pilot: unweighted correction D_j at level j = k + {}, k = {}", in.pilotLevel,
+                                     in.maxBounces);
+    } else if (in.debias.estimator == DebiasEstimator::None) {
+        plan.estimator = fmt::format("biased path tracing I(k), k = max_bounces = {}", in.maxBounces);
+    } else {
+        plan.estimator = fmt::format(
+            "debiased path depth ({} estimator), base k = {}, {}, {}",
+            in.debias.estimator == DebiasEstimator::SingleTerm ? "single-term" : "Russian-roulette sum",
+            in.maxBounces, pmfDescription(in.debias.pmf),
+            plan.levelSchedule == LevelSchedule::Uniform
+                ? "one level per sample index shared by all pixels (level_schedule 'uniform')"
+            : plan.levelSchedule == LevelSchedule::Queued
+                ? "level drawn per pixel sample, work sorted by level (level_schedule 'queued')"
+                : "level drawn per pixel sample in the shader");
+    }
+
+    // ---- Feature switches folded into the pipeline ----
+    auto feature = [&](const char* name, bool on, const char* yes, const char* no) {
+        plan.features.push_back({name, on, on ? yes : no});
+    };
+    feature("spheres", f.spheres, "sphere primitives present", "no sphere primitives");
+    feature("disks", f.disks, "disk primitives present", "no disk primitives");
+    feature("specular", f.specular, "mirror or dielectric materials present", "no mirror or dielectric materials");
+    feature("light sampling", in.enableLightSampling && f.lightCount > 0, "next-event estimation",
+            in.enableLightSampling ? "no lights" : "enable_light_sampling is false");
+    feature("environment", f.environment, "infinite_sphere emitter", "no environment emitter");
+    feature("debias", in.debias.estimator != DebiasEstimator::None, "debias block in the integrator",
+            "no debias block: plain I(k)");
+    feature("media", f.media, "media or forward boundaries present", "no participating media");
+    feature("grid media", f.grids, "voxel grid media present", "no grid media");
+
+    const uint32_t maxTraceDepth = 4096;
+    plan.featuresOf = "path_trace";
+    plan.pathTraceSpec = {
+        {kSpecMaxBounces, in.maxBounces},
+        {kSpecMinBounces, in.minBounces},
+        {kSpecDebiasMode, uint32_t(in.debias.estimator)},
+        {kSpecPmfType, uint32_t(in.debias.pmf.type)},
+        {kSpecPmfR, gpu::specFloat(in.debias.pmf.r)},
+        {kSpecPmfAlpha, gpu::specFloat(in.debias.pmf.alpha)},
+        {kSpecHasSpheres, f.spheres},
+        {kSpecHasDisks, f.disks},
+        {kSpecHasSpecular, f.specular},
+        {kSpecLightCount, f.lightCount},
+        {kSpecLightSampling, in.enableLightSampling && f.lightCount > 0},
+        {kSpecTwoSided, in.enableTwoSidedShading},
+        {kSpecFilter, filterConstant(scene.camera)},
+        {kSpecEnvironmentLight, f.environmentLight},
+        {kSpecMaxTraceDepth, std::max(maxTraceDepth, in.maxBounces + 1)},
+        {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
+        {kSpecPilot, in.pilotLevel != kNoPilotLevel},
+        {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},
+        {kSpecHasMedia, f.media},
+        {kSpecTrEstimator, uint32_t(in.transmittance.type)},
+        {kSpecTrLevel, in.transmittance.level},
+        {kSpecTrPmfType, uint32_t(in.transmittance.pmf.type)},
+        {kSpecTrPmfR, gpu::specFloat(in.transmittance.pmf.r)},
+        {kSpecTrPmfAlpha, gpu::specFloat(in.transmittance.pmf.alpha)},
+        {kSpecCameraMedium, uint32_t(scene.camera.medium + 1)},
+        {kSpecHasGrids, f.grids},
+        {kSpecTrModel, sharedTransmittanceModel(scene)},
+    };
+}
+
+// ---- Passes ----
+namespace {
+
+class PathTracePasses : public SamplePasses {
+public:
+    PathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan, const RenderBuffers& b,
+                    uint32_t seed)
+        : pipeline_(context, "path_trace", shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
+                    plan.pathTraceSpec) {
+        pipeline_.bindBuffers({b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia});
+        const Camera& cam = scene.camera;
+        push_.cameraPosition = cam.position;
+        push_.cameraRight = cam.right;
+        push_.cameraUp = cam.up;
+        push_.cameraForward = cam.forward;
+        push_.planeDistance = 1.0f / std::tan(0.5f * glm::radians(cam.fovDegrees));
+        push_.width = cam.width;
+        push_.height = cam.height;
+        push_.seed = seed;
+        push_.pilotLevel = scene.integrator.pilotLevel;
+        push_.accumAddressLo = uint32_t(b.accum->address());
+        push_.accumAddressHi = uint32_t(b.accum->address() >> 32);
+        groupsX_ = (cam.width + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
+        groupsY_ = (cam.height + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
+        // About a million paths per dispatch, at most 16 samples per pixel in one thread.
+        const uint64_t pixels = uint64_t(cam.width) * cam.height;
+        samplesPerUnit_ = uint32_t(std::clamp<uint64_t>((1u << 20) / std::max<uint64_t>(pixels, 1), 1, 16));
+        if (plan.levelSchedule == LevelSchedule::Queued) makeLevelQueue(context, plan, pixels * samplesPerUnit_);
+    }
+
+    uint32_t samplesPerUnit() const override { return samplesPerUnit_; }
+    // A CommandBatch holds 64 dispatches x the passes of the integrator (see Renderer).
+    uint32_t maxUnitsPerBatch() const override { return levelCount_ ? 12 : 64; }
+
+    void recordUnit(gpu::CommandBatch& batch, uint64_t sampleBase, uint32_t samples) override {
+        push_.sampleBase = uint32_t(sampleBase);
+        push_.sampleCount = samples;
+        record(batch, push_, false);
+    }
+
+    void recordWarmUp(gpu::CommandBatch& batch) override {
+        shader::PathTracePush warm = push_;
+        warm.sampleCount = 0;
+        record(batch, warm, true);
+    }
+
+private:
+    // ---- Queued level schedule: the level queue and its passes (gpu_types.h) ----
+    void makeLevelQueue(gpu::Context& context, const RenderPlan& plan, uint64_t capacity) {
+        if (capacity >= (uint64_t(1) << 27))
+            throw std::runtime_error(fmt::format("{} samples per dispatch is too many for the queued level schedule",
+                                                 capacity));
+        auto align4 = [](uint64_t n) { return (n + 3) / 4 * 4; };
+        const uint64_t chunks = (capacity + shader::kLevelChunk - 1) / shader::kLevelChunk;
+        const uint64_t bytes = (align4(chunks * shader::kLevelBuckets) + align4(capacity)) * 4 + capacity * 32;
+        levelQueue_ = gpu::Buffer(context, bytes, "level queue");
+        levelQueue_.fill(0);
+        push_.queueAddressLo = uint32_t(levelQueue_.address());
+        push_.queueAddressHi = uint32_t(levelQueue_.address() >> 32);
+        push_.queueCapacity = uint32_t(capacity);
+        const uint32_t pushBytes = uint32_t(sizeof(shader::PathTracePush));
+        auto make = [&](const char* name) {
+            return std::make_unique<gpu::ComputePipeline>(context, name, 0, pushBytes, plan.pathTraceSpec);
+        };
+        levelCount_ = make("level_count");
+        levelScan_ = make("level_scan");
+        levelScatter_ = make("level_scatter");
+        pathResolve_ = make("path_resolve");
+    }
+
+    void record(gpu::CommandBatch& batch, const shader::PathTracePush& push, bool warm) {
+        if (!levelCount_) {
+            batch.dispatch(pipeline_, &push, sizeof(push), warm ? 1 : groupsX_, warm ? 1 : groupsY_, 1,
+                           warm ? "warm-up" : "path_trace");
+            return;
+        }
+        // Sort this unit's (pixel, sample) items by level, trace them, resolve per pixel.
+        const uint64_t items = uint64_t(push.width) * push.height * push.sampleCount;
+        const uint64_t chunks = (items + shader::kLevelChunk - 1) / shader::kLevelChunk;
+        const uint32_t chunkGroups = uint32_t(
+            std::max<uint64_t>((chunks + shader::kLevelQueueGroupSize - 1) / shader::kLevelQueueGroupSize, 1));
+        auto name = [warm](const char* pass) { return warm ? "warm-up" : pass; };
+        batch.dispatch(*levelCount_, &push, sizeof(push), chunkGroups, 1, 1, name("level_count"));
+        batch.dispatch(*levelScan_, &push, sizeof(push), 1, 1, 1, name("level_scan"));
+        batch.dispatch(*levelScatter_, &push, sizeof(push), chunkGroups, 1, 1, name("level_scatter"));
+        batch.dispatch(pipeline_, &push, sizeof(push), groupsX_, groupsY_, 1, name("path_trace"));
+        batch.dispatch(*pathResolve_, &push, sizeof(push), groupsX_, groupsY_, 1, name("path_resolve"));
+    }
+
+    std::unique_ptr<gpu::ComputePipeline> levelCount_, levelScan_, levelScatter_, pathResolve_;
+    gpu::Buffer levelQueue_;
+    gpu::ComputePipeline pipeline_;
+    shader::PathTracePush push_{};
+    uint32_t groupsX_ = 1, groupsY_ = 1, samplesPerUnit_ = 1;
+};
+
+}  // namespace
+
+std::unique_ptr<SamplePasses> makePathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan,
+                                                  const RenderBuffers& buffers, uint32_t seed) {
+    return std::make_unique<PathTracePasses>(context, scene, plan, buffers, seed);
+}
+
+}  // namespace telescope

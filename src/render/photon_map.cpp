@@ -1,0 +1,184 @@
+#include "render/photon_map.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace telescope {
+
+namespace {
+constexpr uint32_t kMaxTableSize = 1u << 24;
+constexpr uint64_t kMaxGroups = 4096;  // grid-stride loops cover the rest
+
+// Buckets hold cells, and cells hold several photons: half a bucket per photon of capacity.
+uint32_t tableSizeFor(uint64_t capacity) {
+    uint32_t t = 1024;
+    while (t < capacity / 2 && t < kMaxTableSize) t <<= 1;
+    return t;
+}
+uint32_t lo(VkDeviceAddress a) { return uint32_t(a); }
+uint32_t hi(VkDeviceAddress a) { return uint32_t(a >> 32); }
+}  // namespace
+
+PhotonMap::PhotonMap(gpu::Context& context, uint64_t capacity) : context_(context) {
+    header_ = gpu::Buffer(context, sizeof(shader::PhotonMapHeader), "photon map header");
+    for (uint32_t stage = shader::kGridStageClear; stage <= shader::kGridStageScatter; ++stage)
+        stages_.push_back(std::make_unique<gpu::ComputePipeline>(context, "hash_grid_build", 0,
+                                                                 uint32_t(sizeof(shader::HashGridPush)),
+                                                                 std::vector<gpu::SpecConstant>{{shader::kSpecGridStage, stage}}));
+    allocate(std::max<uint64_t>(capacity, 1));
+}
+
+void PhotonMap::allocate(uint64_t capacity) {
+    if (capacity > (uint64_t(1) << 31))
+        throw std::runtime_error(fmt::format("{} photons in one pass is more than the photon map holds (2^31)", capacity));
+    capacity_ = capacity;
+    tableSize_ = tableSizeFor(capacity);
+    photons_ = gpu::Buffer(context_, capacity * sizeof(shader::Photon), "photons");
+    sorted_ = gpu::Buffer(context_, capacity * sizeof(shader::Photon), "photons in bucket order");
+    cellCount_ = gpu::Buffer(context_, uint64_t(tableSize_) * 4, "hash grid bucket counts");
+    cellStart_ = gpu::Buffer(context_, uint64_t(tableSize_) * 4, "hash grid bucket ends");
+    // Block totals of every scan level above the table.
+    scanLevelCounts_ = {tableSize_};
+    scanLevelOffsets_ = {0};
+    uint64_t scratch = 0;
+    while (scanLevelCounts_.back() > shader::kScanBlock) {
+        uint32_t n = (scanLevelCounts_.back() + shader::kScanBlock - 1) / shader::kScanBlock;
+        scanLevelOffsets_.push_back(scratch);
+        scanLevelCounts_.push_back(n);
+        scratch += n;
+    }
+    scanScratch_ = gpu::Buffer(context_, std::max<uint64_t>(scratch, 1) * 4, "hash grid scan block totals");
+}
+
+uint64_t PhotonMap::deviceBytes() const {
+    return photons_.size() + sorted_.size() + cellCount_.size() + cellStart_.size() + scanScratch_.size() + header_.size();
+}
+
+void PhotonMap::reserve(uint64_t photons) {
+    if (photons > capacity_) allocate(photons);
+}
+
+void PhotonMap::shrinkTo(uint64_t photons) {
+    if (photons * 3 < capacity_ * 2) allocate(std::max<uint64_t>(photons, 1));
+}
+
+void PhotonMap::beginPass(float cellSize) {
+    cellSize_ = cellSize;
+    shader::PhotonMapHeader h{};
+    h.storedCount = 0;
+    h.capacity = uint32_t(capacity_);
+    h.tableSize = tableSize_;
+    h.cellSize = cellSize;
+    h.photonsLo = lo(photons_.address());
+    h.photonsHi = hi(photons_.address());
+    h.sortedLo = lo(sorted_.address());
+    h.sortedHi = hi(sorted_.address());
+    h.cellCountLo = lo(cellCount_.address());
+    h.cellCountHi = hi(cellCount_.address());
+    h.cellStartLo = lo(cellStart_.address());
+    h.cellStartHi = hi(cellStart_.address());
+    header_.upload(&h, sizeof(h));
+}
+
+uint64_t PhotonMap::storedCount() const {
+    shader::PhotonMapHeader h{};
+    header_.download(&h, sizeof(h));
+    return h.storedCount;
+}
+
+shader::HashGridPush PhotonMap::basePush() const {
+    shader::HashGridPush p{};
+    p.headerLo = lo(header_.address());
+    p.headerHi = hi(header_.address());
+    return p;
+}
+
+void PhotonMap::recordStage(gpu::CommandBatch& batch, uint32_t stage, const shader::HashGridPush& push,
+                            uint64_t threads) {
+    uint64_t groups = std::clamp<uint64_t>((threads + shader::kGridGroupSize - 1) / shader::kGridGroupSize, 1, kMaxGroups);
+    batch.dispatch(*stages_[stage], &push, sizeof(push), uint32_t(groups), 1, 1, "hash_grid_build");
+}
+
+void PhotonMap::recordBuild(gpu::CommandBatch& batch) {
+    using namespace shader;
+    shader::HashGridPush push = basePush();
+    recordStage(batch, kGridStageClear, push, tableSize_);
+    recordStage(batch, kGridStageCount, push, capacity_);
+
+    // ---- Exclusive scan of the bucket counts: block scans up the levels, then adds down ----
+    const VkDeviceAddress scratch = scanScratch_.address();
+    auto levelAddress = [&](size_t level) {
+        return level == 0 ? cellStart_.address() : scratch + scanLevelOffsets_[level] * 4;
+    };
+    for (size_t level = 0; level < scanLevelCounts_.size(); ++level) {
+        shader::HashGridPush p = push;
+        VkDeviceAddress src = level == 0 ? cellCount_.address() : levelAddress(level);
+        VkDeviceAddress dst = levelAddress(level);
+        VkDeviceAddress sums = level + 1 < scanLevelCounts_.size() ? levelAddress(level + 1) : 0;
+        p.srcLo = lo(src), p.srcHi = hi(src), p.dstLo = lo(dst), p.dstHi = hi(dst);
+        p.sumsLo = lo(sums), p.sumsHi = hi(sums);
+        p.count = scanLevelCounts_[level];
+        uint32_t blocks = (p.count + kScanBlock - 1) / kScanBlock;
+        batch.dispatch(*stages_[kGridStageScan], &p, sizeof(p), blocks, 1, 1, "hash_grid_build");
+    }
+    for (size_t level = scanLevelCounts_.size() - 1; level-- > 0;) {
+        shader::HashGridPush p = push;
+        VkDeviceAddress dst = levelAddress(level), sums = levelAddress(level + 1);
+        p.dstLo = lo(dst), p.dstHi = hi(dst), p.sumsLo = lo(sums), p.sumsHi = hi(sums);
+        p.count = scanLevelCounts_[level];
+        recordStage(batch, kGridStageAdd, p, p.count);
+    }
+    recordStage(batch, kGridStageScatter, push, capacity_);
+}
+
+void PhotonMap::recordWarmUp(gpu::CommandBatch& batch) {
+    beginPass(1.0f);
+    shader::HashGridPush p = basePush();
+    for (uint32_t stage = shader::kGridStageClear; stage <= shader::kGridStageScatter; ++stage) {
+        p.count = 0;
+        batch.dispatch(*stages_[stage], &p, sizeof(p), 1, 1, 1, "warm-up");
+    }
+}
+
+void PhotonMap::uploadPhotons(const std::vector<shader::Photon>& photons, float cellSize) {
+    reserve(photons.size());
+    beginPass(cellSize);
+    photons_.upload(photons);
+    shader::PhotonMapHeader h{};
+    header_.download(&h, sizeof(h));
+    h.storedCount = uint32_t(photons.size());
+    header_.upload(&h, sizeof(h));
+}
+
+std::vector<glm::vec4> PhotonMap::query(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& normals,
+                                        float radius, float logRadius2, float logStep2, uint32_t kernel) {
+    using namespace shader;
+    gpu::ComputePipeline pipeline(context_, "hash_grid_build", 0, uint32_t(sizeof(HashGridPush)),
+                                  {{kSpecGridStage, kGridStageQuery}, {kSpecPhotonKernel, kernel}});
+    std::vector<glm::vec4> in(positions.size() * 2);
+    for (size_t i = 0; i < positions.size(); ++i) {
+        in[2 * i] = glm::vec4(positions[i], 0.0f);
+        in[2 * i + 1] = glm::vec4(normals[i], 0.0f);
+    }
+    gpu::Buffer queries(context_, in.size() * sizeof(glm::vec4), "photon queries");
+    gpu::Buffer results(context_, positions.size() * sizeof(glm::vec4), "photon query results");
+    queries.upload(in);
+    HashGridPush p = basePush();
+    p.srcLo = lo(queries.address()), p.srcHi = hi(queries.address());
+    p.dstLo = lo(results.address()), p.dstHi = hi(results.address());
+    p.count = uint32_t(positions.size());
+    p.radius = radius;
+    p.logRadius2 = logRadius2;
+    p.logStep2 = logStep2;
+    gpu::CommandBatch batch(context_, 32);
+    batch.begin();
+    recordBuild(batch);
+    batch.dispatch(pipeline, &p, sizeof(p), uint32_t(std::min<uint64_t>((p.count + 255) / 256, kMaxGroups)), 1, 1,
+                   "query");
+    batch.submitAndWait();
+    return results.downloadAll<glm::vec4>();
+}
+
+}  // namespace telescope

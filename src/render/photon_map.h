@@ -1,0 +1,68 @@
+// The photon map of one pass on the device: the photon buffer, the hash grid (per-bucket counts,
+// bucket ends after the scatter, a copy of the photons in bucket order), the prefix-sum scratch
+// and the header through which the shaders reach all of them by device address. Owns the
+// hash_grid_build pipelines (one per stage of shaders/hash_grid_build.comp).
+//
+// Memory per photon of capacity: 32 bytes (Photon) + 32 (its copy in bucket order) + 8 per hash
+// bucket, with tableSize = the power of two at least half the capacity (at most 2^24 buckets).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "gpu/buffer.h"
+#include "gpu/context.h"
+#include "gpu/pipeline.h"
+#include "shared/gpu_types.h"
+
+namespace telescope {
+
+class PhotonMap {
+public:
+    PhotonMap(gpu::Context& context, uint64_t capacity);
+
+    uint64_t capacity() const { return capacity_; }
+    uint32_t tableSize() const { return tableSize_; }
+    VkDeviceAddress headerAddress() const { return header_.address(); }
+    uint64_t deviceBytes() const;
+
+    // Grows the buffers to hold at least `photons` photons (contents are lost).
+    void reserve(uint64_t photons);
+    // Reallocates for `photons` photons when the capacity is over 1.5 times that (contents lost).
+    void shrinkTo(uint64_t photons);
+    // Writes the header for the next pass: no photons stored, the given cell size.
+    void beginPass(float cellSize);
+    // Photons the last pass tried to store (more than capacity() when it overflowed).
+    uint64_t storedCount() const;
+
+    // Records the hash-grid build over the stored photons: clear, count, scan, scatter.
+    void recordBuild(gpu::CommandBatch& batch);
+    void recordWarmUp(gpu::CommandBatch& batch);
+
+    // Tests: uploads photons directly (position, power, incoming direction).
+    void uploadPhotons(const std::vector<shader::Photon>& photons, float cellSize);
+    // Tests: gatherPhotons() at each query (position, normal), with kernel sums at radius and
+    // the difference between the levels given by logRadius2 and logStep2 (power.x only).
+    // Returns (base, difference, found, 0) per query.
+    std::vector<glm::vec4> query(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& normals,
+                                 float radius, float logRadius2, float logStep2, uint32_t kernel);
+
+private:
+    void allocate(uint64_t capacity);
+    void recordStage(gpu::CommandBatch& batch, uint32_t stage, const shader::HashGridPush& push, uint64_t threads);
+    shader::HashGridPush basePush() const;
+
+    gpu::Context& context_;
+    uint64_t capacity_ = 0;
+    uint32_t tableSize_ = 0;
+    float cellSize_ = 1.0f;
+    gpu::Buffer header_, photons_, sorted_, cellCount_, cellStart_, scanScratch_;
+    std::vector<uint64_t> scanLevelOffsets_;  // element offset of each block-total level in scanScratch_
+    std::vector<uint32_t> scanLevelCounts_;   // elements of level 0 (the table), 1, 2, ...
+    std::vector<std::unique_ptr<gpu::ComputePipeline>> stages_;  // indexed by kGridStage*
+};
+
+}  // namespace telescope

@@ -1,0 +1,63 @@
+// The passes an integrator contributes to a render, scheduled generically by the Renderer.
+//
+// A render adds samples per pixel in units: a unit is the dispatches that add samplesPerUnit()
+// samples (the path tracer: one path_trace dispatch of several samples; photon mapping: one
+// photon pass of photon_trace, hash_grid_build and gather, one sample per pixel). The Renderer
+// records up to maxUnitsPerBatch() units into one submit, and asks batchComplete() afterwards:
+// a batch that must be repeated (photon buffers grown) has added nothing to the accumulation.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "gpu/buffer.h"
+#include "gpu/context.h"
+#include "gpu/pipeline.h"
+#include "render/render_plan.h"
+#include "scene/scene.h"
+
+namespace telescope {
+
+// Buffers every integrator reads: the scene (bindings 0..3) and the accumulation (by address).
+struct RenderBuffers {
+    const gpu::Buffer* prims = nullptr;
+    const gpu::Buffer* nodes = nullptr;
+    const gpu::Buffer* materials = nullptr;
+    const gpu::Buffer* lights = nullptr;
+    const gpu::Buffer* accum = nullptr;
+    // Participating media (path tracer, bindings 4..6; dummies for scenes without media)
+    const gpu::Buffer* media = nullptr;
+    const gpu::Buffer* gridData = nullptr;
+    const gpu::Buffer* primMedia = nullptr;
+};
+
+class SamplePasses {
+public:
+    virtual ~SamplePasses() = default;
+    virtual uint32_t samplesPerUnit() const = 0;
+    virtual uint32_t maxUnitsPerBatch() const = 0;
+    // Records the dispatches of one unit adding `samples` (<= samplesPerUnit()) samples per pixel,
+    // whose global indices start at sampleBase.
+    virtual void recordUnit(gpu::CommandBatch& batch, uint64_t sampleBase, uint32_t samples) = 0;
+    // After the batch ran: false when it must be recorded and run again.
+    virtual bool batchComplete() { return true; }
+    // Photon mapping: photon paths traced and photons stored by the last complete batch.
+    virtual uint64_t photonPathsLastBatch() const { return 0; }
+    virtual uint64_t photonsStoredLastBatch() const { return 0; }
+    // Device memory of the integrator's own buffers (the photon map), in bytes.
+    virtual uint64_t deviceBytes() const { return 0; }
+    // Empty dispatches of every pipeline: lavapipe compiles a pipeline at its first dispatch.
+    virtual void recordWarmUp(gpu::CommandBatch& batch) = 0;
+};
+
+std::unique_ptr<SamplePasses> makePathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan,
+                                                  const RenderBuffers& buffers, uint32_t seed);
+std::unique_ptr<SamplePasses> makePhotonPasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan,
+                                               const RenderBuffers& buffers, uint32_t seed);
+
+// The passes, feature switches and specialisation constants each integrator adds to a plan
+// (render_plan.cpp calls the one of the scene's integrator).
+void planPathTrace(const Scene& scene, const SceneFeatures& features, RenderPlan& plan);
+void planPhotons(const Scene& scene, const SceneFeatures& features, RenderPlan& plan);
+
+}  // namespace telescope

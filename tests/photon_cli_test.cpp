@@ -1,0 +1,120 @@
+// The telescope command on photon scenes: the plan names the photon passes, bad photon settings
+// are one-line errors naming the file and the key (exit 2, nothing written), and signed pixels
+// reach the EXR unclamped, with the positive and negative parts of the correction.
+#include <OpenImageIO/imageio.h>  // before anything that may pull in X11
+
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "render/image_output.h"
+#include "render_harness.h"
+
+namespace fs = std::filesystem;
+using namespace telescope;
+
+namespace {
+
+class PhotonCli : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() /
+               ("telescope-photon-cli-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    // Exit code, stdout and stderr of the telescope command.
+    int run(const std::string& args, std::string* out = nullptr, std::string* err = nullptr) {
+        const std::string outFile = (dir_ / "stdout.txt").string(), errFile = (dir_ / "stderr.txt").string();
+        int status = std::system((std::string(TELESCOPE_BINARY) + " " + args + " >" + outFile + " 2>" + errFile).c_str());
+        auto slurp = [](const std::string& path) {
+            std::ifstream in(path);
+            std::stringstream ss;
+            ss << in.rdbuf();
+            return ss.str();
+        };
+        if (out) *out = slurp(outFile);
+        if (err) *err = slurp(errFile);
+        fs::remove(outFile);
+        fs::remove(errFile);
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    }
+
+    void expectBadInput(const std::string& set, const std::string& key) {
+        std::string err;
+        int code = run("render " + scene() + " -o " + path("a.exr") + " --set '" + set + "'", nullptr, &err);
+        EXPECT_EQ(code, 2) << set << "\n" << err;
+        EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+        EXPECT_NE(err.find("point-plane-photon.json"), std::string::npos) << err;
+        EXPECT_NE(err.find(key), std::string::npos) << err;
+        EXPECT_TRUE(fs::is_empty(dir_)) << "bad input left files behind";
+    }
+
+    std::string scene() const { return test::sourcePath("scenes/point-plane-photon.json"); }
+    std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+    fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(PhotonCli, PlanListsThePhotonPasses) {
+    for (const char* file : {"scenes/point-plane-photon.json", "scenes/cornell-box-caustic.json"}) {
+        std::string text;
+        ASSERT_EQ(run("plan " + test::sourcePath(file), &text), 0);
+        const std::string scheduled = text.substr(0, text.find("not scheduled:"));
+        for (const char* pass : {"photon_trace", "hash_grid_build", "gather"})
+            EXPECT_NE(scheduled.find(pass), std::string::npos) << pass << " missing in\n" << text;
+        EXPECT_EQ(scheduled.find("path_trace "), std::string::npos) << text;
+    }
+}
+
+TEST_F(PhotonCli, BadPhotonSettingsNameTheFileAndKey) {
+    expectBadInput("integrator.gather_radius=-1", "integrator.gather_radius");
+    expectBadInput("integrator.photon_count=0", "integrator.photon_count");
+    expectBadInput("integrator.kernel=\"gaussian\"", "integrator.kernel");
+    expectBadInput("integrator.direct_lighting=\"sometimes\"", "integrator.direct_lighting");
+    expectBadInput("integrator.debias={\"estimator\":\"sum\"}", "integrator.debias.estimator");
+}
+
+TEST_F(PhotonCli, ProgressiveTypeIsAccepted) {
+    std::string err;
+    EXPECT_EQ(run("plan " + scene() + " --set 'integrator.type=\"progressive_photon_map\"'", nullptr, &err), 0) << err;
+}
+
+TEST_F(PhotonCli, NegativePixelsSurviveToTheExr) {
+    const std::string exr = path("pp.exr"), stats = path("stats.json");
+    std::string err;
+    ASSERT_EQ(run("render " + scene() + " -o " + exr + " --spp 2 --seed 3 -q --stats-json " + stats +
+                      " --set camera.resolution=[32,32] --set integrator.photon_count=20000",
+                  nullptr, &err),
+              0)
+        << err;
+    RgbImage img = readExrChannels(exr, {"R", "base.R", "correction.R", "correction_positive.R", "correction_negative.R"});
+    size_t negative = 0, negativeParts = 0;
+    for (size_t p = 0; p < size_t(img.width) * img.height; ++p) {
+        const float* px = &img.pixels[p * 5];
+        negative += px[0] < 0.0f;
+        negativeParts += px[4] < 0.0f;
+        EXPECT_NEAR(px[0], px[1] + px[2], 1e-4f * (1.0f + std::abs(px[0]))) << p;
+        EXPECT_NEAR(px[2], px[3] + px[4], 1e-4f * (1.0f + std::abs(px[3]) + std::abs(px[4]))) << p;
+    }
+    EXPECT_GT(negative, 0u) << "negative pixels must not be clamped";
+    EXPECT_GT(negativeParts, 0u);
+    std::ifstream in(stats);
+    nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["photon_paths"].get<uint64_t>(), 40000u);
+    EXPECT_GT(j["photons_stored"].get<uint64_t>(), 10000u);
+    EXPECT_EQ(j["validation_messages"].get<uint64_t>(), 0u);
+}

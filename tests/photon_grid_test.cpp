@@ -1,0 +1,110 @@
+// The device hash grid (hash_grid_build.comp + photon_gather.glsl) against a brute-force gather
+// over every photon on the CPU, with the same shared kernel code: random photons around the
+// origin (negative coordinates included), radii from 1e-4 to 1e2 of the scene size, mostly
+// empty cells at small radii, three scan levels for a large table.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "render/photon_map.h"
+#include "render_harness.h"
+#include "shared/photon_density.h"
+#include "shared/rng.h"
+
+using namespace telescope;
+using namespace telescope::test;
+using namespace telescope::shader;
+
+namespace {
+
+glm::vec3 direction(Rng& rng) {
+    float z = 1.0f - 2.0f * rngNext(rng), phi = 2.0f * kPi * rngNext(rng), s = std::sqrt(std::max(0.0f, 1.0f - z * z));
+    return glm::vec3(s * std::cos(phi), s * std::sin(phi), z);
+}
+
+struct Sums {
+    double base = 0.0, difference = 0.0, magnitude = 0.0;
+    uint32_t found = 0;
+};
+
+Sums bruteForce(const std::vector<Photon>& photons, glm::vec3 x, glm::vec3 n, float radius, float logRadius2,
+                float logStep2, uint32_t kernel) {
+    Sums s;
+    const float rb2 = radius * radius, rj2 = rb2 * std::exp(logRadius2);
+    for (const Photon& p : photons) {
+        glm::vec3 d = x - p.position;
+        float d2 = glm::dot(d, d);
+        if (!(d2 < rb2) || glm::dot(decodeDirection(p.direction), n) <= 0.0f) continue;
+        ++s.found;
+        double w = double(p.power.x) * kernelWeight(kernel, d2, rb2);
+        s.base += w;
+        s.magnitude += std::abs(w);
+        if (d2 < rj2) {
+            double dw = double(p.power.x) * kernelDifference(kernel, d2, rj2, logStep2);
+            s.difference += dw;
+            s.magnitude += std::abs(dw);
+        }
+    }
+    return s;
+}
+
+// Photons in a cube of side `size` centred at the origin; queries at photons (displaced by up to
+// the radius) and at random points.
+void compareWithBruteForce(uint32_t photonCount, float size, float radius, uint32_t kernel, uint32_t queryCount,
+                           uint32_t seed) {
+    Rng rng = rngCreate(seed, 1, 2);
+    std::vector<Photon> photons(photonCount);
+    for (Photon& p : photons) {
+        p.position = (glm::vec3(rngNext(rng), rngNext(rng), rngNext(rng)) - 0.5f) * size;
+        p.power = glm::vec3(0.5f + rngNext(rng), 0.0f, 0.0f);
+        p.direction = encodeDirection(direction(rng));
+        p.cell = 0;
+    }
+    std::vector<glm::vec3> xs(queryCount), ns(queryCount);
+    for (uint32_t i = 0; i < queryCount; ++i) {
+        if (i % 2 == 0) xs[i] = photons[rngNextUint(rng) % photonCount].position + direction(rng) * (radius * rngNext(rng));
+        else xs[i] = (glm::vec3(rngNext(rng), rngNext(rng), rngNext(rng)) - 0.5f) * size;
+        ns[i] = direction(rng);
+    }
+    const LevelPmf pmf{kPmfPowerLaw, 0.0f, 2.0f / 3.0f};
+    const float logRadius2 = levelLogRadius2(pmf, 3.0f, 1.0f), logStep2 = levelLogStep2(pmf, 3.0f);
+
+    PhotonMap map(sharedContext(), photonCount);
+    map.uploadPhotons(photons, 2.0f * radius);
+    std::vector<glm::vec4> got = map.query(xs, ns, radius, logRadius2, logStep2, kernel);
+    ASSERT_EQ(got.size(), queryCount);
+    uint32_t nonEmpty = 0;
+    for (uint32_t i = 0; i < queryCount; ++i) {
+        Sums want = bruteForce(photons, xs[i], ns[i], radius, logRadius2, logStep2, kernel);
+        nonEmpty += want.found > 0;
+        const double tol = 1e-4 * want.magnitude + 1e-30;
+        ASSERT_EQ(uint32_t(got[i].z), want.found) << "query " << i << " radius " << radius;
+        ASSERT_NEAR(got[i].x, want.base, tol) << "query " << i << " radius " << radius;
+        ASSERT_NEAR(got[i].y, want.difference, tol) << "query " << i << " radius " << radius;
+    }
+    EXPECT_GE(nonEmpty, queryCount / 8) << "the queries should find photons";
+}
+
+class PhotonGrid : public ::testing::Test {
+protected:
+    void TearDown() override { expectNoValidationMessages(); }
+};
+
+}  // namespace
+
+TEST_F(PhotonGrid, MatchesBruteForceFromTinyToHugeRadii) {
+    const float size = 10.0f;
+    for (float relative : {1e-4f, 1e-3f, 1e-2f, 1e-1f, 1.0f, 1e2f})
+        compareWithBruteForce(20000, size, relative * size, kKernelCone, 256, 11);
+}
+
+TEST_F(PhotonGrid, MatchesBruteForceForEveryKernel) {
+    for (uint32_t kernel : {kKernelCone, kKernelUniform, kKernelEpanechnikov})
+        compareWithBruteForce(5000, 2.0f, 0.1f, kernel, 256, 17 + kernel);
+}
+
+TEST_F(PhotonGrid, ThreeScanLevels) {
+    // 2.5 M photons: a table of 2^21 buckets, scanned in three levels (2^21, 2048, 2).
+    compareWithBruteForce(2500000, 4.0f, 0.02f, kKernelCone, 64, 23);
+}
