@@ -41,6 +41,7 @@ layout(push_constant) uniform Push { PathTracePush pc; };
 #define BVH_NODE(i) nodes[i]
 #define BVH_PRIM(i) prims[i]
 #include "shared/intersect.h"
+#include "medium.glsl"
 #include "path_tracer.glsl"
 
 // Camera ray of sample s (Tungsten's pinhole: pixel (0,0) top-left, fov horizontal) and the

@@ -57,28 +57,30 @@ vec3 primEmission(Prim pr, vec3 dir, vec3 ng) {
     return lights[uint(pr.light)].radiance;
 }
 
-// Next-event estimation from a Lambertian point p with normal n (facing the viewer):
-// one light picked by power, one shadow ray, MIS against cosine sampling.
-vec3 sampleDirectLambert(vec3 p, vec3 ng, vec3 n, vec3 albedo, inout Rng rng) {
+// One light picked by power and a direction towards it from p: the shadow-ray length, the
+// incident radiance divided by the solid-angle pdf, and that pdf (0 for point lights: no MIS).
+struct LightSample {
+    vec3 wi;
+    float dist;
+    vec3 weight;
+    float pdf;
+};
+
+bool sampleLight(vec3 p, inout Rng rng, out LightSample ls) {
     uint li = pickLight(rngNext(rng));
     LightGpu light = lights[li];
     float u1 = rngNext(rng), u2 = rngNext(rng);
-
-    // Direction, shadow-ray length and unshadowed contribution for each kind of light.
-    vec3 wi;
-    float dist;
-    vec3 value;
+    ls.pdf = 0.0;
     if (light.type == kLightPoint) {
         vec3 d = light.position - p;
-        dist = length(d);
-        wi = d / dist;
-        value = light.radiance * max(dot(n, wi), 0.0) / (dist * dist * light.pmf);
+        ls.dist = length(d);
+        ls.wi = d / ls.dist;
+        ls.weight = light.radiance / (ls.dist * ls.dist * light.pmf);
     } else if (light.type == kLightEnvironment) {
-        wi = sampleUniformSphere(u1, u2);
-        dist = kInfinity;
-        float cosS = max(dot(n, wi), 0.0);
-        float pdfLight = light.pmf / (4.0 * kPi);
-        value = light.radiance * cosS * powerHeuristic(pdfLight, cosS * kInvPi) / pdfLight;
+        ls.wi = sampleUniformSphere(u1, u2);
+        ls.dist = kInfinity;
+        ls.pdf = light.pmf / (4.0 * kPi);
+        ls.weight = light.radiance / ls.pdf;
     } else {
         // Area light: a uniform point on the emissive prim.
         Prim pr = prims[light.prim];
@@ -94,22 +96,47 @@ vec3 sampleDirectLambert(vec3 p, vec3 ng, vec3 n, vec3 albedo, inout Rng rng) {
             nq = pr.n;
         }
         vec3 d = q - p;
-        dist = length(d);
-        wi = d / max(dist, 1e-30);
-        float cosS = dot(n, wi);
-        float cosL = -dot(wi, nq);
-        if (cosS <= 0.0 || cosL <= 0.0 || !(dist > 0.0)) return vec3(0.0);
-        float pdfLight = areaLightPdf(li, pr.area, dist, cosL);
-        value = light.radiance * cosS * powerHeuristic(pdfLight, cosS * kInvPi) / pdfLight;
-        dist *= 1.0 - 1e-4;  // stop short of the light itself
+        ls.dist = length(d);
+        ls.wi = d / max(ls.dist, 1e-30);
+        float cosL = -dot(ls.wi, nq);
+        if (cosL <= 0.0 || !(ls.dist > 0.0)) return false;
+        ls.pdf = areaLightPdf(li, pr.area, ls.dist, cosL);
+        ls.weight = light.radiance / ls.pdf;
+        ls.dist *= 1.0 - 1e-4;  // stop short of the light itself
     }
+    return true;
+}
+
+// Next-event estimation from a Lambertian point p with normal n (facing the viewer):
+// one light picked by power, one shadow ray, MIS against cosine sampling. With media the shadow
+// ray starts in `medium` (index + 1) and `crossings` counts the forward surfaces it passed.
+vec3 sampleDirectLambert(vec3 p, vec3 ng, vec3 n, vec3 albedo, uint medium, inout Rng rng, out uint crossings) {
+    crossings = 0u;
+    LightSample ls;
+    if (!sampleLight(p, rng, ls)) return vec3(0.0);
+    float cosS = dot(n, ls.wi);
+    if (cosS <= 0.0) return vec3(0.0);
+    float mis = ls.pdf > 0.0 ? powerHeuristic(ls.pdf, cosS * kInvPi) : 1.0;
+    vec3 value = ls.weight * cosS * mis;
     if (!any(greaterThan(value, vec3(0.0)))) return vec3(0.0);
 
     // One shadow ray for every kind of light.
-    vec3 o = offsetRayOrigin(p, ng, wi);
-    float tMax = dist < kInfinity ? max(dist - length(o - p), 0.0) : kInfinity;
-    if (traceAny(o, wi, tMax)) return vec3(0.0);
+    vec3 o = offsetRayOrigin(p, ng, ls.wi);
+    float tMax = ls.dist < kInfinity ? max(ls.dist - length(o - p), 0.0) : kInfinity;
+    if (kHasMedia) return albedo * kInvPi * value * shadowTransmittance(o, ls.wi, tMax, medium, true, rng, crossings);
+    if (traceAny(o, ls.wi, tMax)) return vec3(0.0);
     return albedo * kInvPi * value;
+}
+
+// Next-event estimation from a scattering point p in medium mi (index), travelling along dir:
+// the phase function instead of the BSDF, MIS against phase sampling.
+vec3 sampleDirectMedium(vec3 p, vec3 dir, uint mi, inout Rng rng, out uint crossings) {
+    crossings = 0u;
+    LightSample ls;
+    if (!sampleLight(p, rng, ls)) return vec3(0.0);
+    float phase = phaseHG(dot(dir, ls.wi), mediumPhaseG(mi));
+    float mis = ls.pdf > 0.0 ? powerHeuristic(ls.pdf, phase) : 1.0;
+    return ls.weight * phase * mis * shadowTransmittance(p, ls.wi, ls.dist, mi + 1u, false, rng, crossings);
 }
 
 // ---- One camera path as a state machine: pathStep() advances it by one vertex ----
@@ -125,6 +152,9 @@ struct PathState {
     uint limit;         // deepest bounce with a non-zero weight
     bool specularPrev;  // the camera "vertex" counts as specular for MIS
     PathResult result;
+    uint medium;        // participating medium the ray travels in, index + 1 (0 = vacuum)
+    bool fromSurface;   // the last vertex is a surface (or the camera), not a medium point
+    vec3 lastVertex;    // the last scattering vertex (for light pdfs across forward surfaces)
 };
 
 PathState beginPath(vec3 origin, vec3 dir, uint level) {
@@ -139,14 +169,60 @@ PathState beginPath(vec3 origin, vec3 dir, uint level) {
     s.specularPrev = true;
     s.result.base = vec3(0.0);
     s.result.correction = vec3(0.0);
+    s.medium = kCameraMedium;
+    s.fromSurface = true;
+    s.lastVertex = origin;
     return s;
+}
+
+// ---- A segment through a participating medium (medium.glsl): 0 reached the surface, 1 scattered
+// in the medium (the state is advanced to the next vertex), 2 the path ends ----
+uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng) {
+    uint mi = s.medium - 1u;
+    vec3 p;
+    bool scattered = sampleMediumSegment(mi, s.origin, s.dir, tHit, s.fromSurface, s.throughput, p, rng);
+    if (s.throughput == vec3(0.0)) return 2u;
+    if (!scattered) return 0u;
+    uint v = s.vertex;
+    if (v > s.limit) return 2u;
+    if (kLightSampling && kLightCount > 0u) {
+        uint crossings;
+        vec3 direct = sampleDirectMedium(p, s.dir, mi, rng, crossings);
+        addContribution(s.result, v + crossings, s.throughput * direct, pmf, s.level);
+    }
+    // Phase sampling: the phase function is sampled exactly, so the weight is 1.
+    float g = mediumPhaseG(mi);
+    float u1 = rngNext(rng), u2 = rngNext(rng);
+    vec3 dir = samplePhaseHG(s.dir, g, u1, u2);
+    s.pdfPrev = phaseHG(dot(s.dir, dir), g);
+    s.dir = dir;
+    s.specularPrev = false;
+    s.fromSurface = false;
+    s.origin = p;
+    s.lastVertex = p;
+    s.vertex = v + 1u;
+    if (v > 1u) {
+        float q = maxComponent(abs(s.throughput));
+        if (q < 1.0) {
+            if (rngNext(rng) >= q) return 2u;
+            s.throughput /= q;
+        }
+    }
+    return 1u;
 }
 
 // Traces the next ray of the path and scatters at the vertex it finds; false when the path ends.
 bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     uint v = s.vertex;
     Hit hit;
-    if (!traceClosest(s.origin, s.dir, kInfinity, hit)) {
+    bool found = traceClosest(s.origin, s.dir, kInfinity, hit);
+    if (kHasMedia && s.medium != 0u) {
+        if (!found) return false;  // media are enclosed by their boundaries; an unbounded one absorbs all
+        uint r = mediumStep(s, hit.t, pmf, rng);
+        if (r == 1u) return true;
+        if (r == 2u) return false;
+    }
+    if (!found) {
         if (kEnvironmentLight != 0xffffffffu) {
             LightGpu env = lights[kEnvironmentLight];
             float mis = (s.specularPrev || !kLightSampling) ? 1.0
@@ -167,20 +243,34 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     vec3 le = primEmission(pr, s.dir, ng);
     if (any(greaterThan(le, vec3(0.0)))) {
         float mis = 1.0;
-        if (!s.specularPrev && kLightSampling)
-            mis = powerHeuristic(s.pdfPrev, areaLightPdf(uint(pr.light), pr.area, hit.t, -dot(s.dir, ng)));
+        if (!s.specularPrev && kLightSampling) {
+            float dist = kHasMedia ? length(p - s.lastVertex) : hit.t;
+            mis = powerHeuristic(s.pdfPrev, areaLightPdf(uint(pr.light), pr.area, dist, -dot(s.dir, ng)));
+        }
         addContribution(s.result, v - 1u, s.throughput * le * mis, pmf, s.level);
     }
     if (v > s.limit) return false;  // vertex v only adds light with v or more bounces
 
     MaterialGpu m = materials[pr.material];
+    if (kHasMedia && m.type == kBsdfForward) {
+        // Invisible medium boundary: the ray goes on; the crossing counts as a bounce (Tungsten).
+        s.medium = mediumAcross(hit.prim, ng, s.dir, s.medium);
+        s.origin = offsetRayOrigin(p, ng, s.dir);
+        s.fromSurface = true;
+        s.vertex = v + 1u;
+        return true;
+    }
     bool front = dot(s.dir, ng) < 0.0;
     vec3 n = front ? ng : -ng;  // faces the incoming ray
 
     if (m.type == kBsdfLambert) {
         if (!front && !kTwoSided) return false;
-        if (kLightSampling && kLightCount > 0u)
-            addContribution(s.result, v, s.throughput * sampleDirectLambert(p, ng, n, m.albedo, rng), pmf, s.level);
+        if (kLightSampling && kLightCount > 0u) {
+            uint crossings;
+            uint shadowMedium = kHasMedia ? mediumAcross(hit.prim, ng, -s.dir, s.medium) : 0u;
+            vec3 direct = sampleDirectLambert(p, ng, n, m.albedo, shadowMedium, rng, crossings);
+            addContribution(s.result, v + crossings, s.throughput * direct, pmf, s.level);
+        }
         float u1 = rngNext(rng), u2 = rngNext(rng);
         s.dir = sampleCosineHemisphere(n, u1, u2);
         float cosO = dot(s.dir, n);
@@ -215,7 +305,7 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     // (pbrt's rule; Tungsten waits until the throughput is below 0.1). It changes the noise,
     // not the expectation, of every level.
     if (v > 1u) {
-        float q = maxComponent(s.throughput);
+        float q = maxComponent(abs(s.throughput));
         if (q < 1.0) {
             if (rngNext(rng) >= q) return false;
             s.throughput /= q;
@@ -223,5 +313,10 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     }
     s.origin = offsetRayOrigin(p, ng, s.dir);
     s.vertex = v + 1u;
+    if (kHasMedia) {
+        s.medium = mediumAcross(hit.prim, ng, s.dir, s.medium);
+        s.fromSurface = true;
+        s.lastVertex = p;
+    }
     return true;
 }

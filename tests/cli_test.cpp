@@ -269,3 +269,67 @@ TEST_F(Cli, ConvergeRejectsAnUnknownPreset) {
     expectBadInput("converge " + scene() + " --reference " + out("ref.exr") + " --methods magic:3 --spp 1 -o " + out("conv"),
                    {"--methods", "magic"});
 }
+
+// ---- Participating media: bad input names the file and the key; the plan says what is compiled ----
+TEST_F(Cli, UnknownMediumType) {
+    std::string bad = write("fog.json", R"({"media": [{"name": "fog", "type": "fog"}]})");
+    expectBadInput("render " + bad + " -o " + out("a.exr"), {"fog.json", "media[0].type", "unknown medium type"});
+}
+
+TEST_F(Cli, VdbGridWithoutOpenVdb) {
+    std::string bad = write("vdb.json", R"({"media": [{"type": "voxel", "grid": {"type": "vdb", "file": "x.vdb"}}]})");
+    expectBadInput("render " + bad + " -o " + out("a.exr"), {"vdb.json", "media[0].grid.type", "OpenVDB"});
+}
+
+TEST_F(Cli, UnknownMediumReference) {
+    expectBadInput("render " + test::sourcePath("scenes/absorbing-slab.json") + " -o " + out("a.exr") +
+                       " --set 'primitives[0].int_medium=\"mist\"'",
+                   {"absorbing-slab.json", "primitives[0].int_medium", "unknown medium 'mist'"});
+}
+
+TEST_F(Cli, TrackerOnNonExponentialMedium) {
+    expectBadInput("render " + test::sourcePath("scenes/davis-cloud.json") + " -o " + out("a.exr") +
+                       " --set 'integrator.transmittance_estimator={\"type\":\"delta_tracking\"}'",
+                   {"davis-cloud.json", "integrator.transmittance_estimator.type", "exponential media only"});
+}
+
+TEST_F(Cli, NegativeMediumDensity) {
+    expectBadInput("render " + test::sourcePath("scenes/smoke-box.json") + " -o " + out("a.exr") +
+                       " --set media[0].density=-1",
+                   {"smoke-box.json", "media[0].density"});
+}
+
+TEST_F(Cli, PlanSaysWhetherVolumeCodeIsCompiled) {
+    auto plan = [&](const std::string& scenePath) {
+        std::string outFile = (dir_ / "plan.txt").string();
+        int status = std::system((std::string(TELESCOPE_BINARY) + " plan " + scenePath + " > " + outFile).c_str());
+        EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+        std::ifstream in(outFile);
+        std::stringstream ss;
+        ss << in.rdbuf();
+        return ss.str();
+    };
+    std::string withMedia = plan(test::sourcePath("scenes/absorbing-slab.json"));
+    EXPECT_NE(withMedia.find("debiased_ray_march"), std::string::npos) << withMedia;
+    EXPECT_NE(withMedia.find("media            on"), std::string::npos) << withMedia;
+    std::string without = plan(scene());
+    EXPECT_NE(without.find("media            off"), std::string::npos) << without;
+    EXPECT_NE(without.find("volume code folded out"), std::string::npos) << without;
+}
+
+TEST_F(Cli, StudyTransmittanceWritesCsvHeatMapsAndSummary) {
+    std::string dir = out("study");
+    CommandResult r = run("study transmittance -q --samples 256 -o " + dir);
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    std::ifstream csv(dir + "/transmittance.csv");
+    std::string header;
+    std::getline(csv, header);
+    EXPECT_NE(header.find("work_x_rel_mse"), std::string::npos) << header;
+    size_t rows = 0;
+    for (std::string line; std::getline(csv, line);) ++rows;
+    EXPECT_EQ(rows, 2u * 300 + 4u * 150) << "two ray marchers on both models, four exponential-only estimators";
+    EXPECT_TRUE(fs::exists(dir + "/summary.md"));
+    for (const char* e : {"ray_march", "debiased_ray_march", "delta_tracking", "ratio_tracking", "residual_ratio_tracking",
+                          "unbiased_ray_march"})
+        EXPECT_TRUE(fs::exists(dir + "/heat_" + std::string(e) + ".png")) << e << " (gnuplot-nox installed?)";
+}

@@ -5,6 +5,7 @@
 #define TELESCOPE_GPU_TYPES_H
 
 #include "shared/lang.h"
+#include "shared/transmittance.h"
 
 SHADER_NAMESPACE_BEGIN
 
@@ -33,6 +34,7 @@ CONST uint kBsdfLambert = 0u;
 CONST uint kBsdfMirror = 1u;
 CONST uint kBsdfDielectric = 2u;
 CONST uint kBsdfNull = 3u;
+CONST uint kBsdfForward = 4u;  // invisible medium boundary (Tungsten's "forward")
 
 struct MaterialGpu {
     vec3 albedo; uint type;
@@ -53,9 +55,34 @@ struct LightGpu {
     float pmf; float cdf; float pad0; float pad1;  // light selection probability, inclusive cdf
 };
 
+// ---- Participating media ----
+CONST uint kMediumHomogeneous = 0u;
+CONST uint kMediumExponential = 1u;  // density exp(-falloffScale dot(x - unitPoint, falloffDir))
+CONST uint kMediumGrid = 2u;         // voxel grid over the box [gridMin, gridMax], trilinear
+CONST uint kPhaseIsotropic = 0u;
+CONST uint kPhaseHenyeyGreenstein = 1u;
+
+struct MediumGpu {
+    vec3 sigmaT; uint type;           // sigma_a + sigma_s, per unit density
+    vec3 sigmaS; float density;
+    vec3 falloffDir; float falloffScale;
+    vec3 unitPoint; float phaseG;
+    vec3 gridMin; uint gridOffset;    // first voxel in the grid-data buffer
+    vec3 gridMax; float gridMaxDensity;
+    uvec3 gridRes; float gridMinDensity;
+    uint phase; uint pad0; uint pad1; uint pad2;
+    TrModel model;
+};
+
+// Prim media: bits 0..15 the interior medium + 1, 16..30 the exterior medium + 1 (0 = vacuum);
+// kPrimMediaNone: the prim has no media keys and leaves the current medium unchanged.
+CONST uint kPrimMediaNone = 0xffffffffu;
+
 SHADER_NAMESPACE_END
 
 #ifdef __cplusplus
+static_assert(sizeof(telescope::shader::MediumGpu) == 176);
+static_assert(sizeof(telescope::shader::TrModel) == 48);
 static_assert(sizeof(telescope::shader::Prim) == 64);
 static_assert(sizeof(telescope::shader::BvhNode) == 32);
 static_assert(sizeof(telescope::shader::MaterialGpu) == 32);
@@ -70,7 +97,12 @@ CONST uint kBindingPrims = 0u;
 CONST uint kBindingBvh = 1u;
 CONST uint kBindingMaterials = 2u;
 CONST uint kBindingLights = 3u;
-CONST uint kPathTraceBindingCount = 4u;  // the accumulation buffer is reached by address
+// Participating media (shaders/medium.glsl): bound for every scene, dummies without media.
+CONST uint kBindingMedia = 4u;      // MediumGpu[]
+CONST uint kBindingGridData = 5u;   // float voxel densities of every grid medium
+CONST uint kBindingPrimMedia = 6u;  // uint per prim slot: media on its two sides (kPrimMedia*)
+CONST uint kPathTraceBindingCount = 7u;
+CONST uint kSceneBindingCount = 4u;      // photon_trace and gather: the scene only (no media)  // the accumulation buffer is reached by address
 
 // Specialisation constant ids: features a scene lacks are folded away by the compiler.
 CONST uint kSpecMaxBounces = 0u;
@@ -91,6 +123,17 @@ CONST uint kSpecMaxTraceDepth = 14u;
 CONST uint kSpecRayEpsilon = 15u;        // absolute ray offset, from the scene size
 CONST uint kSpecPilot = 16u;             // pmf pilot: every sample takes the level pc.pilotLevel
 CONST uint kSpecLevelSchedule = 17u;     // kLevelSchedule*: how per-sample levels are laid out on lanes
+
+// Participating media, ids 32..47 (shaders/medium.glsl).
+CONST uint kSpecHasMedia = 32u;          // media or forward (index-matched) boundaries present
+CONST uint kSpecTrEstimator = 33u;       // kTrEst* (shared/transmittance_estimators.h)
+CONST uint kSpecTrLevel = 34u;
+CONST uint kSpecTrPmfType = 35u;
+CONST uint kSpecTrPmfR = 36u;
+CONST uint kSpecTrPmfAlpha = 37u;
+CONST uint kSpecCameraMedium = 38u;      // medium index + 1, 0 = vacuum
+CONST uint kSpecHasGrids = 39u;
+CONST uint kSpecTrModel = 40u;           // the transmittance model every medium shares, or 0xffffffff
 
 CONST uint kFilterBox = 0u;
 CONST uint kFilterTent = 1u;

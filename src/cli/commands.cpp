@@ -23,6 +23,7 @@
 #include "study/converge.h"
 #include "study/pmf_pilot.h"
 #include "study/reference.h"
+#include "study/transmittance_study.h"
 
 namespace fs = std::filesystem;
 
@@ -342,6 +343,27 @@ int runConverge(const CommonOptions& common, const ConvergeOptionsCli& c) {
 
     gpu::Context context(contextOptions(common));
     ConvergeReport report = runConverge(context, o);
+    checkValidation(context);
+    if (!common.quiet)
+        for (const auto& f : report.files) fmt::print(stderr, "wrote {}\n", f);
+    return 0;
+}
+
+int runStudyTransmittance(const CommonOptions& common, const StudyTransmittanceCli& c) {
+    if (c.outDir.empty()) throw InputError("", "-o", "an output directory is required");
+    fs::path dir(c.outDir);
+    fs::path parent = dir.parent_path().empty() ? fs::path(".") : dir.parent_path();
+    if (!fs::is_directory(parent))
+        throw InputError("", "-o", fmt::format("directory '{}' does not exist", parent.string()));
+    if (c.level > 16) throw InputError("", "--level", "the level must be at most 16");
+    TransmittanceStudyOptions o;
+    o.outDir = c.outDir;
+    o.samples = c.samples;
+    o.level = c.level;
+    o.seed = c.seed;
+    if (!common.quiet) o.log = [](const std::string& line) { fmt::print(stderr, "study: {}\n", line); };
+    gpu::Context context(contextOptions(common));
+    TransmittanceStudyReport report = runTransmittanceStudy(context, o);
     checkValidation(context);
     if (!common.quiet)
         for (const auto& f : report.files) fmt::print(stderr, "wrote {}\n", f);

@@ -60,7 +60,15 @@ struct ConvergeOptionsCli {
     std::string outDir;
 };
 
+struct StudyTransmittanceCli {
+    std::string outDir;
+    uint32_t samples = 16384;
+    uint32_t level = 1;
+    uint32_t seed = 1;
+};
+
 int runRender(const CommonOptions& common, const RenderOptions& options);
+int runStudyTransmittance(const CommonOptions& common, const StudyTransmittanceCli& options);
 int runReference(const CommonOptions& common, const ReferenceOptions& options);
 int runMerge(const MergeOptions& options);
 int runConverge(const CommonOptions& common, const ConvergeOptionsCli& options);

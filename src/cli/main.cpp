@@ -6,6 +6,7 @@
 //   telescope merge A.checkpoint B.checkpoint ... -o OUT.exr            independent renders
 //   telescope converge SCENE --reference REF.exr --methods A,B (--time T | --spp LIST) -o DIR
 //   telescope plan SCENE [--set key=value ...]
+//   telescope study transmittance -o DIR [--samples N] [--level K]    the 1-D transmittance study
 //   telescope devices
 //
 // Exit codes: 0 success, 2 bad input (one line naming the file and the key), 1 runtime failure.
@@ -98,6 +99,19 @@ int main(int argc, char** argv) {
     converge->add_option("--seed", convergeOptions.seed, "Random seed");
     converge->add_option("-o,--output", convergeOptions.outDir, "Output directory")->required();
 
+    // ---- study transmittance ----
+    StudyTransmittanceCli studyOptions;
+    auto* study = app.add_subcommand("study", "Studies that need no scene");
+    study->require_subcommand(1);
+    auto* studyTr = study->add_subcommand(
+        "transmittance", "Every transmittance estimator on 1-D problems on the device: work x MSE as CSV, heat maps, summary");
+    addCommon(studyTr, false);
+    studyTr->add_option("-o,--output", studyOptions.outDir, "Output directory")->required();
+    studyTr->add_option("--samples", studyOptions.samples, "Estimates per estimator and problem (default 16384)")
+        ->check(CLI::PositiveNumber);
+    studyTr->add_option("--level", studyOptions.level, "Ray-marching level k (2^k points) and debiased base (default 1)");
+    studyTr->add_option("--seed", studyOptions.seed, "Random seed");
+
     // ---- plan, devices ----
     auto* plan = app.add_subcommand("plan", "Print the passes a render of the scene would run, and why");
     addCommon(plan);
@@ -121,6 +135,7 @@ int main(int argc, char** argv) {
         if (merge->parsed()) return runMerge(mergeOptions);
         if (converge->parsed()) return runConverge(common, convergeOptions);
         if (plan->parsed()) return runPlan(common);
+        if (studyTr->parsed()) return runStudyTransmittance(common, studyOptions);
         return runDevices();
     } catch (const InputError& e) {
         fmt::print(stderr, "telescope: {}\n", e.what());

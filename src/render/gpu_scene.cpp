@@ -1,5 +1,6 @@
 #include "render/gpu_scene.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <glm/gtc/constants.hpp>
@@ -44,6 +45,41 @@ float areaOf(const Geometry& g) {
 
 }  // namespace
 
+shader::MediumGpu mediumToGpu(const Medium& m, std::vector<float>& gridData) {
+    shader::MediumGpu g{};
+    g.sigmaT = m.sigmaA + m.sigmaS;
+    g.sigmaS = m.sigmaS;
+    g.type = uint32_t(m.type);
+    g.density = m.density;
+    g.falloffDir = m.falloffDirection;
+    g.falloffScale = m.falloffScale;
+    g.unitPoint = m.unitPoint;
+    g.phase = m.phase;
+    g.phaseG = m.phaseG;
+    g.model.type = m.transmittance.type;
+    g.model.typeA = m.transmittance.typeA;
+    g.model.typeB = m.transmittance.typeB;
+    g.model.ratio = m.transmittance.ratio;
+    g.model.a = m.transmittance.params;
+    g.model.b = m.transmittance.paramsB;
+    if (m.type == MediumType::Grid) {
+        // Voxels scaled by the medium density; bounds for the trackers' majorant.
+        g.gridOffset = uint32_t(gridData.size());
+        g.gridMin = m.grid.boxMin;
+        g.gridMax = m.grid.boxMax;
+        g.gridRes = m.grid.resolution;
+        float lo = INFINITY, hi = 0.0f;
+        for (float d : m.grid.density) {
+            gridData.push_back(d * m.density);
+            lo = std::min(lo, d * m.density);
+            hi = std::max(hi, d * m.density);
+        }
+        g.gridMinDensity = std::isfinite(lo) ? lo : 0.0f;
+        g.gridMaxDensity = hi;
+    }
+    return g;
+}
+
 GpuScene buildGpuScene(const Scene& scene) {
     GpuScene out;
     SceneFeatures& f = out.features;
@@ -57,6 +93,7 @@ GpuScene buildGpuScene(const Scene& scene) {
         g.flags = m.enableRefraction ? shader::kMaterialRefraction : 0u;
         out.materials.push_back(g);
         if (m.type == BsdfType::Mirror || m.type == BsdfType::Dielectric) f.specular = true;
+        if (m.type == BsdfType::Forward) f.media = true;
     }
     if (out.materials.empty()) out.materials.push_back({});  // keep the buffer non-empty
 
@@ -101,6 +138,8 @@ GpuScene buildGpuScene(const Scene& scene) {
             f.areaLights = true;
         }
         out.prims.push_back(p);
+        out.primMedia.push_back(g.hasMedia ? uint32_t(g.intMedium + 1) | (uint32_t(g.extMedium + 1) << 16)
+                                           : shader::kPrimMediaNone);
     }
 
     // ---- Point lights and the environment ----
@@ -137,6 +176,15 @@ GpuScene buildGpuScene(const Scene& scene) {
     f.lightCount = uint32_t(out.lights.size());
     if (out.lights.empty()) out.lights.push_back({});
     if (out.prims.empty()) out.prims.push_back({});
+
+    // ---- Participating media ----
+    for (const Medium& m : scene.media) out.media.push_back(mediumToGpu(m, out.gridData));
+    f.mediumCount = uint32_t(scene.media.size());
+    f.media = f.media || !scene.media.empty();
+    for (const Medium& m : scene.media) f.grids = f.grids || m.type == MediumType::Grid;
+    if (out.media.empty()) out.media.push_back({});
+    if (out.gridData.empty()) out.gridData.push_back(0.0f);
+    while (out.primMedia.size() < out.prims.size()) out.primMedia.push_back(shader::kPrimMediaNone);
     return out;
 }
 

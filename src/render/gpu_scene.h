@@ -20,6 +20,9 @@ struct SceneFeatures {
     uint32_t environmentLight = 0xffffffffu;  // index in the light table
     uint32_t lightCount = 0;
     float sceneExtent = 1.0f;   // bounding-box diagonal of the geometry (1 when empty)
+    bool media = false;         // participating media or forward (medium boundary) surfaces
+    bool grids = false;         // grid media
+    uint32_t mediumCount = 0;
 };
 
 struct GpuScene {
@@ -27,6 +30,9 @@ struct GpuScene {
     std::vector<shader::BvhNode> nodes;
     std::vector<shader::MaterialGpu> materials;
     std::vector<shader::LightGpu> lights;
+    std::vector<shader::MediumGpu> media;    // never empty (a dummy without media)
+    std::vector<float> gridData;             // voxels of every grid medium
+    std::vector<uint32_t> primMedia;         // per prim slot (shader::kPrimMediaNone or packed)
     SceneFeatures features;
 };
 
@@ -34,5 +40,8 @@ struct GpuScene {
 // pi times the area for area lights, 4 pi times the intensity for point lights); the environment
 // gets the power of a sphere around the scene.
 GpuScene buildGpuScene(const Scene& scene);
+
+// A medium as the shaders see it; a grid's voxels (times the density) are appended to gridData.
+shader::MediumGpu mediumToGpu(const Medium& m, std::vector<float>& gridData);
 
 }  // namespace telescope

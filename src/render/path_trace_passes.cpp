@@ -11,6 +11,17 @@
 namespace telescope {
 
 // ---- Plan ----
+namespace {
+// The transmittance model type every medium shares (simple models only), else 0xffffffff.
+uint32_t sharedTransmittanceModel(const Scene& scene) {
+    if (scene.media.empty()) return 0;
+    uint32_t type = scene.media[0].transmittance.type;
+    for (const Medium& m : scene.media)
+        if (m.transmittance.type != type) return 0xffffffffu;
+    return type == shader::kTrInterpolated ? 0xffffffffu : type;
+}
+}  // namespace
+
 void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
     using namespace shader;
     const IntegratorSettings& in = scene.integrator;
@@ -19,6 +30,18 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
                            "integrator 'path_tracer': camera paths with next-event estimation and MIS, "
                            "accumulated per pixel"});
     plan.skipped.push_back({"photon_trace, hash_grid_build, gather", "the integrator does not use photons"});
+    if (f.media) {
+        const auto& t = in.transmittance;
+        std::string how = transmittanceEstimatorName(t.type);
+        if (t.type == TransmittanceEstimatorType::RayMarch) how += fmt::format(" (2^{} points, biased)", t.level);
+        if (t.type == TransmittanceEstimatorType::DebiasedRayMarch)
+            how += fmt::format(" (base level {}, {})", t.level, pmfDescription(t.pmf));
+        plan.passes[0].why += fmt::format("; volumetric path tracing through {} medi{} (single and multiple scattering, "
+                                          "next-event estimation), every transmittance by {}",
+                                          f.mediumCount, f.mediumCount == 1 ? "um" : "a", how);
+    } else {
+        plan.skipped.push_back({"volume tracking", "the scene has no participating media: volume code folded out of path_trace"});
+    }
 
     // ---- Level schedule: only a debiased render (not the pilot) has levels to schedule ----
     if (in.debias.estimator != DebiasEstimator::None && in.pilotLevel == kNoPilotLevel)
@@ -68,6 +91,8 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     feature("environment", f.environment, "infinite_sphere emitter", "no environment emitter");
     feature("debias", in.debias.estimator != DebiasEstimator::None, "debias block in the integrator",
             "no debias block: plain I(k)");
+    feature("media", f.media, "media or forward boundaries present", "no participating media");
+    feature("grid media", f.grids, "voxel grid media present", "no grid media");
 
     const uint32_t maxTraceDepth = 4096;
     plan.featuresOf = "path_trace";
@@ -90,6 +115,15 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
         {kSpecPilot, in.pilotLevel != kNoPilotLevel},
         {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},
+        {kSpecHasMedia, f.media},
+        {kSpecTrEstimator, uint32_t(in.transmittance.type)},
+        {kSpecTrLevel, in.transmittance.level},
+        {kSpecTrPmfType, uint32_t(in.transmittance.pmf.type)},
+        {kSpecTrPmfR, gpu::specFloat(in.transmittance.pmf.r)},
+        {kSpecTrPmfAlpha, gpu::specFloat(in.transmittance.pmf.alpha)},
+        {kSpecCameraMedium, uint32_t(scene.camera.medium + 1)},
+        {kSpecHasGrids, f.grids},
+        {kSpecTrModel, sharedTransmittanceModel(scene)},
     };
 }
 
@@ -102,7 +136,7 @@ public:
                     uint32_t seed)
         : pipeline_(context, "path_trace", shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
                     plan.pathTraceSpec) {
-        pipeline_.bindBuffers({b.prims, b.nodes, b.materials, b.lights});
+        pipeline_.bindBuffers({b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia});
         const Camera& cam = scene.camera;
         push_.cameraPosition = cam.position;
         push_.cameraRight = cam.right;

@@ -23,7 +23,6 @@ RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
     RenderPlan plan;
     if (usesPhotons(scene.integrator)) planPhotons(scene, f, plan);
     else planPathTrace(scene, f, plan);
-    plan.skipped.push_back({"ray_march", "the scene has no participating media"});
     return plan;
 }
 

@@ -33,6 +33,9 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
     nodes_ = makeBuffer(gpuScene_.nodes, "bvh nodes");
     materials_ = makeBuffer(gpuScene_.materials, "materials");
     lights_ = makeBuffer(gpuScene_.lights, "lights");
+    media_ = makeBuffer(gpuScene_.media, "media");  // dummies without media
+    gridData_ = makeBuffer(gpuScene_.gridData, "grid data");
+    primMedia_ = makeBuffer(gpuScene_.primMedia, "prim media");
 
     // ---- Accumulation: (hi, lo) vec4 pairs per channel and pixel ----
     const uint64_t pixels = uint64_t(scene.camera.width) * scene.camera.height;
@@ -43,7 +46,7 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
     accum_ = gpu::Buffer(context, accumBytes, "accumulation");
     accum_.fill(0);
 
-    const RenderBuffers buffers{&prims_, &nodes_, &materials_, &lights_, &accum_};
+    const RenderBuffers buffers{&prims_, &nodes_, &materials_, &lights_, &accum_, &media_, &gridData_, &primMedia_};
     passes_ = usesPhotons(scene.integrator) ? makePhotonPasses(context, scene, plan_, buffers, seed)
                                             : makePathTracePasses(context, scene, plan_, buffers, seed);
     batch_ = std::make_unique<gpu::CommandBatch>(context, kMaxDispatchesPerBatch);

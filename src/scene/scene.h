@@ -15,7 +15,7 @@
 
 namespace telescope {
 
-enum class BsdfType : uint32_t { Lambert = 0, Mirror = 1, Dielectric = 2, Null = 3 };
+enum class BsdfType : uint32_t { Lambert = 0, Mirror = 1, Dielectric = 2, Null = 3, Forward = 4 };
 
 struct Material {
     std::string name;
@@ -37,7 +37,53 @@ struct Geometry {
     uint32_t material = 0;                   // index into Scene::materials
     glm::vec3 emission{0.0f};                // radiance, already converted from "power"
     uint32_t shape = 0;                      // index into Scene::shapes (the source primitive)
+    // Media on the two sides (index into Scene::media, -1 = vacuum); used only if hasMedia
+    // (a primitive without int_medium / ext_medium leaves the current medium unchanged).
+    bool hasMedia = false;
+    int32_t intMedium = -1, extMedium = -1;
 };
+
+// ---- Participating media (docs/MEDIA.md) ----
+enum class MediumType : uint32_t { Homogeneous = 0, Exponential = 1, Grid = 2 };
+
+// A transmittance model (shaders/shared/transmittance.h: kTr* types and their parameters).
+// Interpolated: typeA/paramsA and typeB/paramsB are the two models, mixed by ratio.
+struct TransmittanceModel {
+    uint32_t type = 0;
+    glm::vec4 params{0.0f};
+    uint32_t typeA = 0, typeB = 0;
+    glm::vec4 paramsB{0.0f};
+    float ratio = 0.5f;
+    std::string name = "exponential";
+    bool exponential() const { return type == 0; }
+};
+
+struct DensityGrid {
+    glm::uvec3 resolution{0};
+    std::vector<float> density;  // x fastest
+    glm::vec3 boxMin{-0.5f}, boxMax{0.5f};  // world-space box the grid fills
+    std::string source;          // "procedural_cloud", "constant"
+};
+
+struct Medium {
+    std::string name;
+    MediumType type = MediumType::Homogeneous;
+    glm::vec3 sigmaA{0.0f}, sigmaS{0.0f};
+    float density = 1.0f;
+    float falloffScale = 1.0f;                   // exponential
+    glm::vec3 unitPoint{0.0f};                   // exponential
+    glm::vec3 falloffDirection{0.0f, 1.0f, 0.0f};  // exponential, unit
+    DensityGrid grid;                            // grid
+    uint32_t phase = 0;                          // 0 isotropic, 1 henyey_greenstein
+    float phaseG = 0.0f;
+    TransmittanceModel transmittance;
+};
+
+enum class TransmittanceEstimatorType : uint32_t {
+    RayMarch = 0, DebiasedRayMarch = 1, DeltaTracking = 2, RatioTracking = 3, ResidualRatioTracking = 4,
+    UnbiasedRayMarch = 5
+};
+const char* transmittanceEstimatorName(TransmittanceEstimatorType t);
 
 enum class LightType : uint32_t { Point = 0, Environment = 1 };
 
@@ -56,7 +102,8 @@ struct Camera {
     glm::vec3 right{1.0f, 0.0f, 0.0f};    // unit, image right = forward x up (Tungsten)
     float fovDegrees = 60.0f;             // horizontal full angle
     uint32_t width = 512, height = 512;
-    std::string filter = "tent";          // reconstruction filter name (dirac, box, tent; others sampled as tent)
+    std::string filter = "tent";
+    int32_t medium = -1;                  // index into Scene::media, -1 = vacuum          // reconstruction filter name (dirac, box, tent; others sampled as tent)
 };
 
 // Settings of the debiasing telescope (ESTIMATORS.md section 1-2).
@@ -97,6 +144,13 @@ struct PhotonSettings {
     PhotonKernel kernel = PhotonKernel::Cone;             // "kernel"
     DirectLighting directLighting = DirectLighting::NextEvent;  // "direct_lighting"
 };
+// "transmittance_estimator": {"type": ..., "level": k, "pmf": {...}} (docs/MEDIA.md).
+struct TransmittanceEstimatorSettings {
+    TransmittanceEstimatorType type = TransmittanceEstimatorType::DebiasedRayMarch;
+    uint32_t level = 1;  // ray marching: 2^k points; debiased: the base level k
+    PmfSettings pmf;     // debiased: geometric or power law (levels above k)
+};
+
 
 struct IntegratorSettings {
     IntegratorType type = IntegratorType::PathTracer;
@@ -106,6 +160,8 @@ struct IntegratorSettings {
     bool enableTwoSidedShading = true;
     DebiasSettings debias;
     PhotonSettings photon;  // photon_map and progressive_photon_map only
+    // "transmittance_estimator": how every transmittance factor of a path is estimated.
+    TransmittanceEstimatorSettings transmittance;
     // Set by the pmf pilot only (not a scene key): every sample takes this level and records the
     // unweighted correction D_j instead of its estimate, with no base.
     uint32_t pilotLevel = kNoPilotLevel;
@@ -129,6 +185,7 @@ struct Scene {
     std::vector<Geometry> geometry;
     std::vector<PointLikeLight> lights;
     std::vector<Shape> shapes;
+    std::vector<Medium> media;
     Camera camera;
     IntegratorSettings integrator;
     RendererSettings renderer;

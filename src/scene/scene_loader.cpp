@@ -22,6 +22,7 @@
 #include <tiny_obj_loader.h>
 
 #include "core/error.h"
+#include "scene/density_grid.h"
 #include "scene/transform.h"
 
 namespace telescope {
@@ -39,7 +40,7 @@ constexpr uint32_t kMaxPhotonCount = 1u << 27;  // photon paths per pass (4 GiB 
 
 // Tungsten types that exist but Telescope does not implement (yet)
 constexpr std::string_view kUnsupportedBsdfs[] = {
-    "phong", "mixed", "conductor", "rough_conductor", "rough_dielectric", "smooth_coat", "forward",
+    "phong", "mixed", "conductor", "rough_conductor", "rough_dielectric", "smooth_coat",
     "thinsheet", "oren_nayar", "plastic", "rough_plastic", "rough_coat", "transparency",
     "lambertian_fiber", "rough_wire", "hair", "diffuse_transmission"};
 constexpr std::string_view kUnsupportedPrimitives[] = {
@@ -221,6 +222,15 @@ private:
     void readPhotonSettings(const json& v, const std::string& key);
     void readRenderer(const json& v);
 
+    // Participating media (docs/MEDIA.md)
+    void readMedia(const json& list);
+    Medium readMedium(const json& v, const std::string& key);
+    TransmittanceModel readTransmittance(const json& v, const std::string& key, bool nested);
+    DensityGrid readGrid(const json& v, const std::string& key);
+    int32_t mediumRef(const json& ref, const std::string& key);
+    void readTransmittanceEstimator(const json& v, const std::string& key);
+    void checkEstimatorFitsMedia(const json& doc) const;
+
     // Geometry
     MeshData loadMesh(const json& v, const std::string& key) const;
     MeshData loadWo3(const fs::path& path, const std::string& key) const;
@@ -233,6 +243,7 @@ private:
     std::vector<Material> namedBsdfs_;
     std::map<std::string, size_t> bsdfByName_;                 // first bsdf of each name
     std::vector<std::optional<uint32_t>> namedBsdfMaterial_;   // index in scene_.materials once used
+    std::map<std::string, int32_t> mediumByName_;
 };
 
 // ---- Typed values ----
@@ -340,7 +351,7 @@ void SceneReader::ignoreUnread(const json& obj, const std::string& key, std::ini
 void SceneReader::rejectMedia(const json& obj, const std::string& key, std::initializer_list<std::string_view> keys) const {
     for (std::string_view name : keys)
         if (const json* m = find(obj, name); m && !m->is_null())
-            fail(member(key, name), "participating media are not supported yet");
+            fail(member(key, name), "media are set on primitives (int_medium, ext_medium) and the camera (medium)");
 }
 
 // ---- Top level ----
@@ -350,7 +361,7 @@ void SceneReader::read(const json& doc) {
 
     if (const json* media = find(doc, "media")) {
         if (!media->is_array() && !media->is_null()) fail("media", "expected an array, got " + quote(*media));
-        if (media->is_array() && !media->empty()) fail("media", "participating media are not supported yet");
+        if (media->is_array()) readMedia(*media);
     }
     if (const json* bsdfs = find(doc, "bsdfs")) readBsdfs(*bsdfs);
     if (const json* primitives = find(doc, "primitives")) {
@@ -360,6 +371,7 @@ void SceneReader::read(const json& doc) {
     readCamera(find(doc, "camera") ? doc["camera"] : json::object());
     if (const json* integrator = find(doc, "integrator")) readIntegrator(*integrator);
     if (const json* renderer = find(doc, "renderer")) readRenderer(*renderer);
+    checkEstimatorFitsMedia(doc);
     ignoreUnread(doc, "", {"media", "bsdfs", "primitives", "camera", "integrator", "renderer"});
 }
 
@@ -387,6 +399,7 @@ Material SceneReader::readBsdf(const json& v, const std::string& key) {
     else if (type == "mirror") m.type = BsdfType::Mirror;
     else if (type == "dielectric") m.type = BsdfType::Dielectric;
     else if (type == "null") m.type = BsdfType::Null;
+    else if (type == "forward") m.type = BsdfType::Forward;
     else if (isOneOf(kUnsupportedBsdfs, type)) fail(member(key, "type"), fmt::format("unsupported bsdf type '{}'", type));
     else fail(member(key, "type"), fmt::format("unknown bsdf type '{}'", type));
 
@@ -444,7 +457,12 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
     if (const json* name = find(v, "name")) shape.name = string(*name, member(key, "name"));
     const uint32_t shapeIndex = static_cast<uint32_t>(scene_.shapes.size());
     scene_.shapes.push_back(shape);
-    rejectMedia(v, key, {"int_medium", "ext_medium"});
+    // Media on the two sides: a missing one of the two is vacuum; neither leaves the medium unchanged.
+    const json* intMedium = find(v, "int_medium");
+    const json* extMedium = find(v, "ext_medium");
+    const bool hasMedia = (intMedium && !intMedium->is_null()) || (extMedium && !extMedium->is_null());
+    const int32_t intIndex = intMedium && !intMedium->is_null() ? mediumRef(*intMedium, member(key, "int_medium")) : -1;
+    const int32_t extIndex = extMedium && !extMedium->is_null() ? mediumRef(*extMedium, member(key, "ext_medium")) : -1;
 
     const glm::mat4 m = find(v, "transform") ? transform(v["transform"], member(key, "transform")) : glm::mat4(1.0f);
 
@@ -546,9 +564,12 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
         if (type != "mesh") g.material = materials[0];
         g.emission = radiance;
         g.shape = shapeIndex;
+        g.hasMedia = hasMedia;
+        g.intMedium = intIndex;
+        g.extMedium = extIndex;
         scene_.geometry.push_back(g);
     }
-    ignoreUnread(v, key, {"name", "type", "transform", "bsdf", "emission", "power", "file"});
+    ignoreUnread(v, key, {"name", "type", "transform", "bsdf", "emission", "power", "file", "int_medium", "ext_medium"});
 }
 
 // ---- Meshes ----
@@ -668,7 +689,7 @@ void SceneReader::readCamera(const json& v) {
     const std::string type = find(v, "type") ? string(v["type"], "camera.type") : "pinhole";
     if (isOneOf(kUnsupportedCameras, type)) fail("camera.type", fmt::format("unsupported camera type '{}'", type));
     if (type != "pinhole") fail("camera.type", fmt::format("unknown camera type '{}'", type));
-    rejectMedia(v, key, {"medium"});
+    if (const json* medium = find(v, "medium"); medium && !medium->is_null()) cam.medium = mediumRef(*medium, "camera.medium");
 
     if (const json* fov = find(v, "fov")) {
         cam.fovDegrees = number(*fov, "camera.fov");
@@ -699,7 +720,7 @@ void SceneReader::readCamera(const json& v) {
     cam.right = glm::normalize(right);
     cam.up = glm::cross(cam.right, cam.forward);
 
-    ignoreUnread(v, key, {"type", "fov", "resolution", "reconstruction_filter", "transform"});
+    ignoreUnread(v, key, {"type", "fov", "resolution", "reconstruction_filter", "transform", "medium"});
 }
 
 // ---- Integrator ----
@@ -725,8 +746,11 @@ void SceneReader::readIntegrator(const json& v) {
     if (const json* b = find(v, "enable_two_sided_shading"))
         s.enableTwoSidedShading = boolean(*b, "integrator.enable_two_sided_shading");
     if (const json* d = find(v, "debias"); d && !d->is_null()) readDebias(*d, "integrator.debias");
+    if (const json* t = find(v, "transmittance_estimator"); t && !t->is_null())
+        readTransmittanceEstimator(*t, "integrator.transmittance_estimator");
 
-    ignoreUnread(v, key, {"type", "min_bounces", "max_bounces", "enable_light_sampling", "enable_two_sided_shading", "debias"});
+    ignoreUnread(v, key, {"type", "min_bounces", "max_bounces", "enable_light_sampling", "enable_two_sided_shading", "debias",
+                          "transmittance_estimator"});
 }
 
 // photon_map and progressive_photon_map: Tungsten's keys (photon_count, gather_radius, alpha,
@@ -854,7 +878,302 @@ void SceneReader::readRenderer(const json& v) {
     ignoreUnread(v, "renderer", {"spp"});
 }
 
+// ---- Participating media ----
+
+// Every key of a Telescope-only object must be known.
+void rejectUnknownKeys(const json& obj, const std::string& objKey, std::initializer_list<std::string_view> known,
+                       const std::string& file) {
+    for (const auto& [name, value] : obj.items())
+        if (!isOneOf(known, name)) throw InputError(file, member(objKey, name), fmt::format("unknown key '{}' in {}", name, objKey));
+}
+
+void SceneReader::readMedia(const json& list) {
+    for (size_t i = 0; i < list.size(); ++i) {
+        const std::string key = element("media", i);
+        Medium m = readMedium(list[i], key);
+        if (!m.name.empty()) mediumByName_.emplace(m.name, int32_t(scene_.media.size()));
+        scene_.media.push_back(std::move(m));
+    }
+}
+
+// A medium reference: a name from the media list or an inline medium object.
+int32_t SceneReader::mediumRef(const json& ref, const std::string& key) {
+    if (ref.is_string()) {
+        const auto it = mediumByName_.find(ref.get<std::string>());
+        if (it == mediumByName_.end()) fail(key, fmt::format("unknown medium '{}'", ref.get<std::string>()));
+        return it->second;
+    }
+    if (ref.is_object()) {
+        scene_.media.push_back(readMedium(ref, key));
+        return int32_t(scene_.media.size() - 1);
+    }
+    fail(key, "expected a medium name or an inline medium object, got " + quote(ref));
+}
+
+Medium SceneReader::readMedium(const json& v, const std::string& key) {
+    expectObject(v, key);
+    const json* typeValue = find(v, "type");
+    if (!typeValue) fail(key, "missing 'type'");
+    const std::string typeKey = member(key, "type");
+    const std::string type = string(*typeValue, typeKey);
+    Medium m;
+    if (type == "homogeneous") m.type = MediumType::Homogeneous;
+    else if (type == "exponential") m.type = MediumType::Exponential;
+    else if (type == "voxel") m.type = MediumType::Grid;
+    else if (type == "atmosphere") fail(typeKey, "unsupported medium type 'atmosphere'");
+    else fail(typeKey, fmt::format("unknown medium type '{}' (expected \"homogeneous\", \"exponential\" or \"voxel\")", type));
+
+    if (const json* name = find(v, "name")) m.name = string(*name, member(key, "name"));
+    auto nonNegative = [&](const char* field, glm::vec3 fallback) {
+        const json* f = find(v, field);
+        if (!f) return fallback;
+        glm::vec3 c = vec3(*f, member(key, field));
+        if (c.x < 0.0f || c.y < 0.0f || c.z < 0.0f) fail(member(key, field), "must be non-negative");
+        return c;
+    };
+    m.sigmaA = nonNegative("sigma_a", glm::vec3(0.0f));
+    m.sigmaS = nonNegative("sigma_s", glm::vec3(0.0f));
+    if (const json* d = find(v, "density")) {
+        m.density = number(*d, member(key, "density"));
+        if (m.density < 0.0f) fail(member(key, "density"), "must be non-negative");
+    }
+    std::vector<std::string_view> read = {"name", "type", "sigma_a", "sigma_s", "density", "phase_function", "transmittance",
+                                          "max_bounces"};
+    if (find(v, "max_bounces")) ignore(member(key, "max_bounces"));
+
+    if (m.type == MediumType::Exponential) {
+        if (const json* f = find(v, "falloff_scale")) {
+            m.falloffScale = number(*f, member(key, "falloff_scale"));
+            if (m.falloffScale < 0.0f) fail(member(key, "falloff_scale"), "must be non-negative");
+        }
+        if (const json* f = find(v, "unit_point")) m.unitPoint = vec3(*f, member(key, "unit_point"));
+        if (const json* f = find(v, "falloff_direction")) {
+            glm::vec3 d = vec3(*f, member(key, "falloff_direction"));
+            if (isDegenerate(d)) fail(member(key, "falloff_direction"), "the direction has zero length");
+            m.falloffDirection = glm::normalize(d);
+        }
+        read.insert(read.end(), {"falloff_scale", "unit_point", "falloff_direction"});
+    }
+    if (m.type == MediumType::Grid) {
+        const json* grid = find(v, "grid");
+        if (!grid) fail(key, "missing 'grid' (a voxel medium needs a grid)");
+        m.grid = readGrid(*grid, member(key, "grid"));
+        read.push_back("grid");
+    }
+
+    if (const json* phase = find(v, "phase_function")) {
+        const std::string pk = member(key, "phase_function");
+        expectObject(*phase, pk);
+        const std::string ptype = find(*phase, "type") ? string((*phase)["type"], member(pk, "type")) : "isotropic";
+        if (ptype == "isotropic") {
+            m.phase = 0;
+            ignoreUnread(*phase, pk, {"type"});
+        } else if (ptype == "henyey_greenstein") {
+            m.phase = 1;
+            if (const json* g = find(*phase, "g")) m.phaseG = number(*g, member(pk, "g"));
+            if (!(m.phaseG > -1.0f && m.phaseG < 1.0f)) fail(member(pk, "g"), "must be in (-1, 1)");
+            ignoreUnread(*phase, pk, {"type", "g"});
+        } else if (ptype == "rayleigh") {
+            fail(member(pk, "type"), "unsupported phase function 'rayleigh'");
+        } else {
+            fail(member(pk, "type"), fmt::format("unknown phase function '{}'", ptype));
+        }
+    }
+    if (const json* t = find(v, "transmittance")) m.transmittance = readTransmittance(*t, member(key, "transmittance"), false);
+    for (const auto& [name, value] : v.items())
+        if (std::find(read.begin(), read.end(), name) == read.end()) ignore(member(key, name));
+    return m;
+}
+
+// Tungsten's transmittance models with its parameter names and defaults.
+TransmittanceModel SceneReader::readTransmittance(const json& v, const std::string& key, bool nested) {
+    expectObject(v, key);
+    const std::string type = find(v, "type") ? string(v["type"], member(key, "type")) : "exponential";
+    TransmittanceModel t;
+    t.name = type;
+    auto param = [&](const char* field, float fallback, bool positive) {
+        const json* f = find(v, field);
+        if (!f) return fallback;
+        float x = number(*f, member(key, field));
+        if (positive && !(x > 0.0f)) fail(member(key, field), "must be positive");
+        return x;
+    };
+    if (type == "exponential") {
+        t.type = 0;
+        ignoreUnread(v, key, {"type"});
+    } else if (type == "linear" || type == "quadratic") {
+        t.type = type == "linear" ? 1 : 2;
+        t.params.x = param("max_t", type == "linear" ? 1.0f : 0.75f, true);
+        ignoreUnread(v, key, {"type", "max_t"});
+    } else if (type == "double_exponential") {
+        t.type = 3;
+        t.params = glm::vec4(param("sigma_a", 0.5f, true), param("sigma_b", 10.0f, true), 0, 0);
+        ignoreUnread(v, key, {"type", "sigma_a", "sigma_b"});
+    } else if (type == "erlang") {
+        t.type = 4;
+        t.params.x = param("rate", 5.0f, true);
+        ignoreUnread(v, key, {"type", "rate"});
+    } else if (type == "davis") {
+        t.type = 5;
+        t.params.x = param("alpha", 1.1f, true);
+        ignoreUnread(v, key, {"type", "alpha"});
+    } else if (type == "davis_weinstein") {
+        t.type = 6;
+        t.params = glm::vec4(param("h", 0.75f, true), param("c", 1.0f, true), 0, 0);
+        if (t.params.x < 0.5f || t.params.x > 1.0f) fail(member(key, "h"), "must be in [0.5, 1]");
+        ignoreUnread(v, key, {"type", "h", "c"});
+    } else if (type == "pulse") {
+        t.type = 7;
+        t.params = glm::vec4(param("min", 0.0f, false), param("max", 1.0f, false), 0, 0);
+        if (!(t.params.y > t.params.x)) fail(member(key, "max"), "must be larger than min");
+        t.params.z = find(v, "num_pulses") ? float(integer(v["num_pulses"], member(key, "num_pulses"), 1, 1024)) : 4.0f;
+        ignoreUnread(v, key, {"type", "min", "max", "num_pulses"});
+    } else if (type == "interpolated") {
+        if (nested) fail(member(key, "type"), "an interpolated transmittance cannot nest another interpolated one");
+        TransmittanceModel a, b;
+        a.type = 1;
+        a.params.x = 1.0f;  // linear
+        b.type = 4;
+        b.params.x = 5.0f;  // erlang
+        if (const json* f = find(v, "tr_a")) a = readTransmittance(*f, member(key, "tr_a"), true);
+        if (const json* f = find(v, "tr_b")) b = readTransmittance(*f, member(key, "tr_b"), true);
+        t.type = 8;
+        t.typeA = a.type;
+        t.params = a.params;
+        t.typeB = b.type;
+        t.paramsB = b.params;
+        t.ratio = param("ratio", 0.5f, false);
+        if (t.ratio < 0.0f || t.ratio > 1.0f) fail(member(key, "ratio"), "must be in [0, 1]");
+        ignoreUnread(v, key, {"type", "tr_a", "tr_b", "ratio"});
+        return t;
+    } else {
+        fail(member(key, "type"), fmt::format("unknown transmittance type '{}'", type));
+    }
+    t.typeA = t.typeB = t.type;
+    t.paramsB = t.params;
+    return t;
+}
+
+// A grid: {"type": "procedural_cloud" | "constant", "resolution", "transform", ...}. OpenVDB files
+// ("vdb") need libopenvdb, which this build does not use.
+DensityGrid SceneReader::readGrid(const json& v, const std::string& key) {
+    expectObject(v, key);
+    const std::string type = find(v, "type") ? string(v["type"], member(key, "type")) : "";
+    if (type == "vdb")
+        fail(member(key, "type"), "OpenVDB grids are not supported by this build of Telescope (no libopenvdb); "
+                                  "use a \"procedural_cloud\" or \"constant\" grid");
+    if (type != "procedural_cloud" && type != "constant")
+        fail(member(key, "type"), fmt::format("unknown grid type '{}' (expected \"procedural_cloud\" or \"constant\")", type));
+    glm::uvec3 res(32);
+    if (const json* r = find(v, "resolution")) {
+        const std::string rk = member(key, "resolution");
+        if (r->is_array()) {
+            if (r->size() != 3) fail(rk, fmt::format("expected [x, y, z], got {} elements", r->size()));
+            for (int i = 0; i < 3; ++i) res[i] = integer((*r)[i], element(rk, i), 1, 512);
+        } else {
+            res = glm::uvec3(integer(*r, rk, 1, 512));
+        }
+    }
+    DensityGrid g;
+    if (type == "constant") {
+        const float value = find(v, "value") ? number(v["value"], member(key, "value")) : 1.0f;
+        if (value < 0.0f) fail(member(key, "value"), "must be non-negative");
+        g = constantGrid(res, value);
+        rejectUnknownKeys(v, key, {"type", "resolution", "transform", "value"}, file_);
+    } else {
+        ProceduralCloudSettings c;
+        c.resolution = res;
+        if (const json* f = find(v, "seed")) c.seed = integer(*f, member(key, "seed"), 0, 0x7fffffff);
+        if (const json* f = find(v, "frequency")) c.frequency = number(*f, member(key, "frequency"));
+        if (const json* f = find(v, "coverage")) c.coverage = number(*f, member(key, "coverage"));
+        if (!(c.frequency > 0.0f)) fail(member(key, "frequency"), "must be positive");
+        g = proceduralCloud(c);
+        rejectUnknownKeys(v, key, {"type", "resolution", "transform", "seed", "frequency", "coverage"}, file_);
+    }
+    // The grid fills the unit cube [-0.5, 0.5]^3 placed by the transform (translation and scale).
+    const glm::mat4 m = find(v, "transform") ? transform(v["transform"], member(key, "transform")) : glm::mat4(1.0f);
+    const glm::vec3 half = 0.5f * columnLengths(m), centre(m[3]);
+    const glm::mat3 rot = columnDirections(m);
+    if (glm::length(glm::abs(rot[0]) - glm::vec3(1, 0, 0)) + glm::length(glm::abs(rot[1]) - glm::vec3(0, 1, 0)) > 1e-4f)
+        fail(member(key, "transform"), "grids must be axis-aligned (translation and scale only)");
+    if (!(half.x > 0.0f && half.y > 0.0f && half.z > 0.0f)) fail(member(key, "transform"), "the grid box has zero size");
+    g.boxMin = centre - half;
+    g.boxMax = centre + half;
+    return g;
+}
+
+void SceneReader::readTransmittanceEstimator(const json& v, const std::string& key) {
+    expectObject(v, key);
+    rejectUnknownKeys(v, key, {"type", "level", "pmf"}, file_);
+    TransmittanceEstimatorSettings& t = scene_.integrator.transmittance;
+    const std::string typeKey = member(key, "type");
+    if (!find(v, "type")) fail(typeKey, "missing");
+    const std::string type = string(v["type"], typeKey);
+    bool found = false;
+    for (uint32_t i = 0; i <= uint32_t(TransmittanceEstimatorType::UnbiasedRayMarch); ++i)
+        if (type == transmittanceEstimatorName(TransmittanceEstimatorType(i))) {
+            t.type = TransmittanceEstimatorType(i);
+            found = true;
+        }
+    if (!found)
+        fail(typeKey, fmt::format("unknown transmittance estimator '{}' (expected ray_march, debiased_ray_march, "
+                                  "delta_tracking, ratio_tracking, residual_ratio_tracking or unbiased_ray_march)", type));
+    if (const json* l = find(v, "level")) t.level = integer(*l, member(key, "level"), 0, 16);
+    if (const json* pmf = find(v, "pmf")) {
+        const std::string pmfKey = member(key, "pmf");
+        expectObject(*pmf, pmfKey);
+        const std::string ptype = find(*pmf, "type") ? string((*pmf)["type"], member(pmfKey, "type")) : "geometric";
+        auto openUnit = [&](const char* field) {
+            const float x = number((*pmf)[field], member(pmfKey, field));
+            if (!(x > 0.0f && x < 1.0f)) fail(member(pmfKey, field), fmt::format("{} must be in (0, 1), got {}", field, x));
+            return x;
+        };
+        if (ptype == "geometric") {
+            rejectUnknownKeys(*pmf, pmfKey, {"type", "r"}, file_);
+            t.pmf.type = PmfType::Geometric;
+            if (find(*pmf, "r")) t.pmf.r = openUnit("r");
+        } else if (ptype == "power_law") {
+            rejectUnknownKeys(*pmf, pmfKey, {"type", "alpha"}, file_);
+            t.pmf.type = PmfType::PowerLaw;
+            if (find(*pmf, "alpha")) t.pmf.alpha = openUnit("alpha");
+        } else {
+            fail(member(pmfKey, "type"), fmt::format("unknown pmf type '{}' (expected \"geometric\" or \"power_law\")", ptype));
+        }
+    }
+}
+
+// The trackers and unbiased ray marching estimate exp(-tau) only.
+void SceneReader::checkEstimatorFitsMedia(const json& doc) const {
+    if (usesPhotons(scene_.integrator) && !scene_.media.empty())
+        fail("media", fmt::format("the '{}' integrator does not support participating media (use path_tracer)",
+                                  scene_.integrator.type == IntegratorType::PhotonMap ? "photon_map"
+                                                                                     : "progressive_photon_map"));
+    const TransmittanceEstimatorType t = scene_.integrator.transmittance.type;
+    if (t == TransmittanceEstimatorType::RayMarch || t == TransmittanceEstimatorType::DebiasedRayMarch) return;
+    for (size_t i = 0; i < scene_.media.size(); ++i)
+        if (!scene_.media[i].transmittance.exponential()) {
+            const std::string where = scene_.media[i].name.empty() ? fmt::format("medium {}", i)
+                                                                     : fmt::format("medium '{}'", scene_.media[i].name);
+            fail(find(doc, "integrator") ? "integrator.transmittance_estimator.type" : "media",
+                 fmt::format("{} works for exponential media only, but {} has the '{}' transmittance "
+                             "(use ray_march or debiased_ray_march)",
+                             transmittanceEstimatorName(t), where, scene_.media[i].transmittance.name));
+        }
+}
+
 }  // namespace
+
+const char* transmittanceEstimatorName(TransmittanceEstimatorType t) {
+    switch (t) {
+        case TransmittanceEstimatorType::RayMarch: return "ray_march";
+        case TransmittanceEstimatorType::DebiasedRayMarch: return "debiased_ray_march";
+        case TransmittanceEstimatorType::DeltaTracking: return "delta_tracking";
+        case TransmittanceEstimatorType::RatioTracking: return "ratio_tracking";
+        case TransmittanceEstimatorType::ResidualRatioTracking: return "residual_ratio_tracking";
+        case TransmittanceEstimatorType::UnbiasedRayMarch: return "unbiased_ray_march";
+    }
+    return "?";
+}
 
 SceneOverride parseOverride(const std::string& text) {
     const size_t eq = text.find('=');

@@ -1,0 +1,248 @@
+// Media and transmittance (docs/BENCHMARKS.md, "Media and transmittance"): work x MSE of every
+// transmittance estimator in renders of the absorbing slab and the smoke box, density lookups per
+// second of the shared estimator code, and the MSE slope of debiased marching. Run through
+// bench/run.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "gpu/context.h"
+#include "render/renderer.h"
+#include "scene/scene_loader.h"
+#include "shared/transmittance_estimators.h"
+
+using namespace telescope;
+
+namespace {
+
+gpu::Context& context() {
+    static gpu::Context ctx{gpu::ContextOptions{}};
+    return ctx;
+}
+
+const std::map<std::string, std::string> kEstimators = {
+    {"ray_march_k1", R"({"type":"ray_march","level":1})"},
+    {"debiased_ray_march", R"({"type":"debiased_ray_march","level":1})"},
+    {"delta_tracking", R"({"type":"delta_tracking"})"},
+    {"ratio_tracking", R"({"type":"ratio_tracking"})"},
+    {"residual_ratio_tracking", R"({"type":"residual_ratio_tracking"})"},
+    {"unbiased_ray_march", R"({"type":"unbiased_ray_march"})"},
+};
+
+// Closed form of scenes/absorbing-slab.json per pixel (see tests/media_render_test.cpp).
+double slabClosedForm(const Camera& cam, uint32_t x, uint32_t y) {
+    const double plane = 1.0 / std::tan(0.5 * cam.fovDegrees * 3.14159265358979323846 / 180.0);
+    const double lx = -1.0 + 2.0 * (x + 0.5) / cam.width, ly = double(cam.height) / cam.width - 2.0 * (y + 0.5) / cam.width;
+    const double cosZ = plane / std::sqrt(lx * lx + ly * ly + plane * plane);
+    const double tauAxis = ly > 0 ? 1.2 : 3.0 * (1.0 - std::exp(-3.0)) / 3.0;
+    return std::exp(-tauAxis / cosZ);
+}
+
+// Work x MSE of a render: render seconds (pipeline compiled before timing) times the mean over
+// pixels of the squared error against the closed form (slab) or of the variance of the mean
+// (smoke box: unbiased estimators only, whose MSE is their variance).
+void renderEfficiency(benchmark::State& state, const std::string& sceneName, const std::string& estimator) {
+    const bool slab = sceneName == "absorbing-slab";
+    std::vector<SceneOverride> overrides = {{"camera.resolution", slab ? "[64,64]" : "[48,36]"},
+                                            {"integrator.transmittance_estimator", kEstimators.at(estimator)}};
+    Scene scene = loadScene(std::string(TELESCOPE_SOURCE_DIR) + "/scenes/" + sceneName + ".json", overrides);
+    const uint64_t spp = slab ? 64 : 16;
+    double seconds = 0.0, workMse = 0.0, mse = 0.0;
+    for (auto _ : state) {
+        Renderer renderer(context(), scene, 7);
+        RenderRequest request;
+        request.spp = spp;
+        renderer.render(request);
+        seconds = renderer.stats().wallSeconds;
+        Film film = renderer.film();
+        double sum = 0.0;
+        for (uint32_t y = 0; y < film.height(); ++y)
+            for (uint32_t x = 0; x < film.width(); ++x) {
+                const size_t i = size_t(y) * film.width() + x;
+                if (slab) {
+                    const double e = film.mean(0, i).x - slabClosedForm(scene.camera, x, y);
+                    sum += e * e;
+                } else {
+                    const glm::dvec3 v = film.varianceOfMean(i);
+                    sum += (v.x + v.y + v.z) / 3.0;
+                }
+            }
+        mse = sum / double(film.pixelCount());
+        workMse = seconds * mse;
+        state.SetIterationTime(seconds);
+    }
+    state.counters["render_s"] = seconds;
+    state.counters["mse"] = mse;
+    state.counters["work_x_mse"] = workMse;
+}
+
+// Density lookups per second of the shared estimator code on the CPU (one thread): a segment of
+// Tungsten's exponential medium, optical depth 1.5, exponential transmittance.
+void lookupsPerSecond(benchmark::State& state, uint32_t type) {
+    using namespace shader;
+    TrSegment s{};
+    s.profile = makeProfile(kProfileExponential, 1.5f * 3.0f / (1.0f - std::exp(-3.0f)), 3.0f, 0.0f);
+    s.sigmaT = glm::vec3(1.0f);
+    s.len = 1.0f;
+    glm::vec2 b = profileBounds(s.profile, 0.0f, 1.0f);
+    s.densityMin = b.x;
+    s.densityMax = b.y;
+    TrEstimator e{type, 1, LevelPmf{kPmfGeometric, 0.65f, 0.0f}};
+    TrModel m = trSimple(kTrExponential, glm::vec4(0.0f));
+    uint32_t lookups = 0, i = 0;
+    float sink = 0.0f;
+    for (auto _ : state) {
+        Rng rng = rngCreate(i++, 3u, 5u);
+        sink += trEstimate(e, m, kFormSurfaceSurface, s, rng, lookups).x;
+    }
+    benchmark::DoNotOptimize(sink);
+    state.counters["lookups_per_s"] = benchmark::Counter(double(lookups), benchmark::Counter::kIsRate);
+    state.counters["lookups_per_estimate"] = double(lookups) / double(state.iterations());
+}
+
+// MSE of the mean of N debiased estimates against the closed form, N = 2^4 .. 2^14 (200
+// repetitions each); the least-squares slope of log MSE against log N (theory: -1).
+void debiasedMseSlope(benchmark::State& state) {
+    using namespace shader;
+    TrSegment s{};
+    s.profile = makeProfile(kProfileSine, 2.0f, 0.9f, 2.3f);
+    s.sigmaT = glm::vec3(1.0f);
+    s.len = 1.0f;
+    glm::vec2 b = profileBounds(s.profile, 0.0f, 1.0f);
+    s.densityMin = b.x;
+    s.densityMax = b.y;
+    TrModel m = trSimple(kTrDavis, glm::vec4(1.5625f, 0, 0, 0));
+    const double truth = trForm(m, kFormSurfaceSurface, float(profileIntegral(s.profile, 0.0, 1.0)));
+    TrEstimator e{kTrEstDebiasedRayMarch, 1, LevelPmf{kPmfGeometric, 0.65f, 0.0f}};
+    double slope = 0.0;
+    for (auto _ : state) {
+        std::vector<double> xs, ys;
+        uint32_t stream = 0;
+        for (uint32_t logN = 4; logN <= 14; logN += 2) {
+            const uint32_t n = 1u << logN;
+            double sq = 0.0;
+            const int reps = 200;
+            for (int r = 0; r < reps; ++r) {
+                double sum = 0.0;
+                uint32_t lookups = 0;
+                for (uint32_t i = 0; i < n; ++i) {
+                    Rng rng = rngCreate(i, stream, 17u);
+                    sum += trEstimate(e, m, kFormSurfaceSurface, s, rng, lookups).x;
+                }
+                ++stream;
+                const double err = sum / n - truth;
+                sq += err * err;
+            }
+            xs.push_back(std::log(double(n)));
+            ys.push_back(std::log(sq / reps));
+        }
+        double mx = 0, my = 0;
+        for (size_t i = 0; i < xs.size(); ++i) { mx += xs[i] / xs.size(); my += ys[i] / ys.size(); }
+        double sxy = 0, sxx = 0;
+        for (size_t i = 0; i < xs.size(); ++i) { sxy += (xs[i] - mx) * (ys[i] - my); sxx += (xs[i] - mx) * (xs[i] - mx); }
+        slope = sxy / sxx;
+    }
+    state.counters["mse_slope"] = slope;
+}
+
+}  // namespace
+
+#define RENDER_BENCH(scene, est)                                                                       \
+    BENCHMARK_CAPTURE(renderEfficiency, scene##_##est, std::string(#scene) == "slab" ? "absorbing-slab" \
+                                                                                      : "smoke-box",    \
+                      #est)                                                                            \
+        ->Iterations(1)->UseManualTime()->Unit(benchmark::kMillisecond)
+RENDER_BENCH(slab, ray_march_k1);
+RENDER_BENCH(slab, debiased_ray_march);
+RENDER_BENCH(slab, delta_tracking);
+RENDER_BENCH(slab, ratio_tracking);
+RENDER_BENCH(slab, residual_ratio_tracking);
+RENDER_BENCH(slab, unbiased_ray_march);
+RENDER_BENCH(smoke, debiased_ray_march);
+RENDER_BENCH(smoke, delta_tracking);
+RENDER_BENCH(smoke, ratio_tracking);
+RENDER_BENCH(smoke, residual_ratio_tracking);
+RENDER_BENCH(smoke, unbiased_ray_march);
+
+BENCHMARK_CAPTURE(lookupsPerSecond, ray_march_k1, shader::kTrEstRayMarch);
+BENCHMARK_CAPTURE(lookupsPerSecond, debiased_ray_march, shader::kTrEstDebiasedRayMarch);
+BENCHMARK_CAPTURE(lookupsPerSecond, delta_tracking, shader::kTrEstDeltaTracking);
+BENCHMARK_CAPTURE(lookupsPerSecond, ratio_tracking, shader::kTrEstRatioTracking);
+BENCHMARK_CAPTURE(lookupsPerSecond, residual_ratio_tracking, shader::kTrEstResidualRatioTracking);
+BENCHMARK_CAPTURE(lookupsPerSecond, unbiased_ray_march, shader::kTrEstUnbiasedRayMarch);
+BENCHMARK(debiasedMseSlope)->Iterations(1)->Unit(benchmark::kSecond);
+
+// ---- Markdown tables next to the console output ----
+class MarkdownReporter : public benchmark::ConsoleReporter {
+public:
+    void ReportRuns(const std::vector<Run>& runs) override {
+        ConsoleReporter::ReportRuns(runs);
+        for (const auto& r : runs) rows_.push_back(r);
+    }
+    std::string tables() const {
+        auto counter = [](const Run& r, const char* name) {
+            auto it = r.counters.find(name);
+            return it == r.counters.end() ? 0.0 : double(it->second);
+        };
+        auto label = [](const Run& r) {
+            std::string n = r.benchmark_name();
+            std::string s = n.substr(n.find('/') + 1);
+            return s.substr(0, s.find('/'));
+        };
+        std::string s;
+        for (const char* scene : {"slab_", "smoke_"}) {
+            double ratio = 0.0;
+            for (const auto& r : rows_)
+                if (label(r) == std::string(scene) + "ratio_tracking") ratio = counter(r, "work_x_mse");
+            s += std::string(scene) == "slab_"
+                     ? "\n**Absorbing slab** (64x64, 64 spp; MSE per pixel against the closed form):\n\n"
+                     : "\n**Smoke box** (48x36, 16 spp; MSE = variance of the pixel mean, unbiased estimators):\n\n";
+            s += "| estimator | render s | MSE | work x MSE | / ratio tracking |\n|---|---|---|---|---|\n";
+            for (const auto& r : rows_) {
+                std::string l = label(r);
+                if (l.rfind(scene, 0) != 0) continue;
+                double w = counter(r, "work_x_mse");
+                s += fmt::format("| {} | {:.3f} | {:.3g} | {:.3g} | {:.2f} |\n", l.substr(std::string(scene).size()),
+                                 counter(r, "render_s"), counter(r, "mse"), w, ratio > 0 ? w / ratio : 0.0);
+            }
+        }
+        s += "\n**Density lookups per second** (shared estimator code on one CPU thread, exponential falloff "
+             "segment, tau = 1.5):\n\n| estimator | Mlookups/s | lookups per estimate |\n|---|---|---|\n";
+        for (const auto& r : rows_)
+            if (r.benchmark_name().rfind("lookupsPerSecond", 0) == 0)
+                s += fmt::format("| {} | {:.1f} | {:.2f} |\n", label(r), counter(r, "lookups_per_s") * 1e-6,
+                                 counter(r, "lookups_per_estimate"));
+        for (const auto& r : rows_)
+            if (r.benchmark_name().rfind("debiasedMseSlope", 0) == 0)
+                s += fmt::format("\n**MSE slope of debiased marching** (Davis c = 0.8, sine density, N = 2^4..2^14 "
+                                 "estimates, 200 repetitions each): {:.3f} (theory: -1).\n",
+                                 counter(r, "mse_slope"));
+        return s;
+    }
+
+private:
+    std::vector<Run> rows_;
+};
+
+int main(int argc, char** argv) {
+    std::string markdown;
+    for (int i = 1; i < argc; ++i)
+        if (std::string(argv[i]).rfind("--markdown=", 0) == 0) markdown = std::string(argv[i]).substr(11);
+    benchmark::Initialize(&argc, argv);
+    MarkdownReporter reporter;
+    benchmark::RunSpecifiedBenchmarks(&reporter);
+    if (!markdown.empty()) {
+        std::ofstream out(markdown);
+        out << fmt::format("Device: {}; host threads: {}.\n", context().info().name, std::thread::hardware_concurrency())
+            << reporter.tables();
+    }
+    benchmark::Shutdown();
+    return 0;
+}

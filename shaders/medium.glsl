@@ -1,0 +1,258 @@
+// Participating media for the path tracer (GLSL only; included by path_trace.comp after the
+// scene buffers and intersect.h, before path_tracer.glsl). Compiled in always, folded away by
+// kHasMedia for scenes without media.
+//
+// Every transmittance factor of a path comes from the chosen estimator
+// (shared/transmittance_estimators.h), on camera segments and on shadow rays, so a path's
+// contribution is unbiased exactly when the estimator is. Free-flight distances are drawn from a
+// guide: the medium's own transmittance model over a homogeneous density mu (optical depth
+// mu (t - t0), mu from a coarse independent comb of the segment); the estimated transmittance divided by the guide pdf weights the sample:
+//   scatter at t:  sigma_s(x_t) sigmaBar <T_{start,medium}(0, t)> / (mu sigmaBar F_{start,medium}(mu (t - t0)))
+//   pass to l:     <T_{start,surface}(0, l)> / F_{start,surface}(mu (l - t0))
+// (forms of shared/transmittance.h; start = surface or medium vertex). Media are indexed + 1
+// (0 = vacuum) in the path state.
+
+layout(constant_id = kSpecHasMedia) const bool kHasMedia = false;
+layout(constant_id = kSpecTrEstimator) const uint kTrEstimatorType = 1u;
+layout(constant_id = kSpecTrLevel) const uint kTrLevel = 1u;
+layout(constant_id = kSpecTrPmfType) const uint kTrPmfType = 0u;
+layout(constant_id = kSpecTrPmfR) const float kTrPmfR = 0.65;
+layout(constant_id = kSpecTrPmfAlpha) const float kTrPmfAlpha = 0.6666667;
+layout(constant_id = kSpecCameraMedium) const uint kCameraMedium = 0u;
+layout(constant_id = kSpecHasGrids) const bool kHasGrids = false;
+layout(constant_id = kSpecTrModel) const uint kSceneTrModel = 0xffffffffu;
+
+layout(std430, binding = kBindingMedia) readonly buffer MediaBuffer { MediumGpu media[]; };
+layout(std430, binding = kBindingGridData) readonly buffer GridBuffer { float gridData[]; };
+layout(std430, binding = kBindingPrimMedia) readonly buffer PrimMediaBuffer { uint primMedia[]; };
+
+// ---- Density ----
+
+// Trilinear lookup of a grid medium at world point p (voxel centres, clamped at the faces).
+float gridDensityAt(uint mi, vec3 p) {
+    vec3 lo = media[mi].gridMin, hi = media[mi].gridMax;
+    uvec3 res = media[mi].gridRes;
+    vec3 unit = (p - lo) / (hi - lo);
+    if (any(lessThan(unit, vec3(0.0))) || any(greaterThan(unit, vec3(1.0)))) return 0.0;
+    vec3 c = clamp(unit * vec3(res) - 0.5, vec3(0.0), vec3(res) - 1.0);
+    uvec3 i0 = uvec3(floor(c));
+    uvec3 i1 = min(i0 + 1u, res - 1u);
+    vec3 t = c - vec3(i0);
+    uint base = media[mi].gridOffset;
+    uint rx = res.x, rxy = res.x * res.y;
+    float v00 = mix(gridData[base + i0.z * rxy + i0.y * rx + i0.x], gridData[base + i0.z * rxy + i0.y * rx + i1.x], t.x);
+    float v10 = mix(gridData[base + i0.z * rxy + i1.y * rx + i0.x], gridData[base + i0.z * rxy + i1.y * rx + i1.x], t.x);
+    float v01 = mix(gridData[base + i1.z * rxy + i0.y * rx + i0.x], gridData[base + i1.z * rxy + i0.y * rx + i1.x], t.x);
+    float v11 = mix(gridData[base + i1.z * rxy + i1.y * rx + i0.x], gridData[base + i1.z * rxy + i1.y * rx + i1.x], t.x);
+    return mix(mix(v00, v10, t.y), mix(v01, v11, t.y), t.z);
+}
+
+#define TR_GRID_DENSITY(s, t) gridDensityAt((s).medium, (s).origin + (s).dir * (t))
+#include "shared/transmittance_estimators.h"
+
+// The model of medium mi; when every medium of the scene has the same simple model its type is a
+// specialisation constant, so the compiler keeps only that model's code.
+TrModel mediumModel(uint mi) {
+    TrModel m = media[mi].model;
+    if (kSceneTrModel != 0xffffffffu) {
+        m.type = kSceneTrModel;
+        m.typeA = kSceneTrModel;
+        m.typeB = kSceneTrModel;
+    }
+    return m;
+}
+
+// Density (relative to sigma_a, sigma_s) of medium mi at world point p.
+float mediumDensityAt(uint mi, vec3 p) {
+    uint type = media[mi].type;
+    if (type == kMediumExponential)
+        return media[mi].density * exp(-media[mi].falloffScale * dot(p - media[mi].unitPoint, media[mi].falloffDir));
+    if (kHasGrids && type == kMediumGrid) return gridDensityAt(mi, p);
+    return media[mi].density;
+}
+
+// The segment o + t d, t in [0, l], of medium mi as a density profile; grid segments are clipped
+// to the grid box (density 0 outside), so their origin moves to the box entry.
+TrSegment mediumSegment(uint mi, vec3 o, vec3 d, float l) {
+    MediumGpu m = media[mi];
+    TrSegment s;
+    s.sigmaT = m.sigmaT;
+    s.origin = o;
+    s.dir = d;
+    s.len = l;
+    s.medium = mi;
+    s.pad0 = 0u; s.pad1 = 0u; s.pad2 = 0u;
+    if (m.type == kMediumExponential) {
+        float h0 = dot(o - m.unitPoint, m.falloffDir);
+        s.profile = makeProfile(kProfileExponential, m.density * exp(-m.falloffScale * h0),
+                                m.falloffScale * dot(d, m.falloffDir), 0.0);
+    } else if (kHasGrids && m.type == kMediumGrid) {
+        vec3 inv = safeInverse(d);
+        vec3 ta = (m.gridMin - o) * inv, tb = (m.gridMax - o) * inv;
+        vec3 tn = min(ta, tb), tf = max(ta, tb);
+        float t0 = max(max(tn.x, tn.y), max(tn.z, 0.0));
+        float t1 = min(min(tf.x, tf.y), min(tf.z, l));
+        s.profile = makeProfile(kProfileGrid, 0.0, 0.0, 0.0);
+        s.origin = o + d * t0;
+        s.len = max(t1 - t0, 0.0);
+        s.densityMin = m.gridMinDensity;
+        s.densityMax = m.gridMaxDensity;
+        return s;
+    } else {
+        s.profile = makeProfile(kProfileConstant, m.density, 0.0, 0.0);
+    }
+    vec2 b = profileBounds(s.profile, 0.0, l);
+    s.densityMin = b.x;
+    s.densityMax = b.y;
+    return s;
+}
+
+TrEstimator sceneTrEstimator() {
+    return TrEstimator(kTrEstimatorType, kTrLevel, LevelPmf(kTrPmfType, kTrPmfR, kTrPmfAlpha));
+}
+
+// Estimated transmittance of medium mi over [0, l] with the form of the endpoint types.
+vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, bool endOnSurface, inout Rng rng) {
+    uint lookups = 0u;
+    return trEstimate(sceneTrEstimator(), mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
+                      mediumSegment(mi, o, d, l), rng, lookups);
+}
+
+// ---- Medium boundaries ----
+
+// The medium (index + 1) a ray continuing in dir is in after crossing prim with geometric normal ng:
+// the interior one on the back side of ng, the exterior one on the front side; prims without media
+// keep the current medium.
+uint mediumAcross(uint prim, vec3 ng, vec3 dir, uint current) {
+    uint packed = primMedia[prim];
+    if (packed == kPrimMediaNone) return current;
+    return dot(dir, ng) < 0.0 ? (packed & 0xffffu) : (packed >> 16u);
+}
+
+vec3 offsetRayOrigin(vec3 p, vec3 ng, vec3 dir);  // path_tracer.glsl
+
+vec3 primNormalAt(Prim pr, vec3 p) {
+    if (kHasSpheres && pr.type == kPrimSphere) return normalize(p - pr.p0);
+    return pr.n;
+}
+
+// Transmittance along a shadow ray from o to o + tMax d: forward surfaces let it through (each
+// counts as a bounce, as in Tungsten), anything else blocks it; every medium segment is estimated.
+vec3 shadowTransmittance(vec3 o, vec3 d, float tMax, uint medium, bool startOnSurface, inout Rng rng,
+                         out uint crossings) {
+    crossings = 0u;
+    vec3 tr = vec3(1.0);
+    for (uint guard = 0u; guard < 256u; ++guard) {
+        Hit hit;
+        bool found = traceClosest(o, d, tMax, hit);
+        float end = found ? hit.t : tMax;
+        if (medium != 0u) {
+            if (!(end < kInfinity)) return vec3(0.0);  // an unbounded medium absorbs everything
+            tr *= mediumTransmittance(medium - 1u, o, d, end, startOnSurface, true, rng);
+        }
+        if (!found) return tr;
+        Prim pr = prims[hit.prim];
+        if (materials[pr.material].type != kBsdfForward) return vec3(0.0);
+        if (tr == vec3(0.0)) return tr;
+        vec3 p = o + d * hit.t;
+        vec3 ng = primNormalAt(pr, p);
+        medium = mediumAcross(hit.prim, ng, d, medium);
+        o = offsetRayOrigin(p, ng, d);
+        if (tMax < kInfinity) tMax = max(tMax - hit.t, 0.0);
+        startOnSurface = true;
+        ++crossings;
+    }
+    return vec3(0.0);
+}
+
+// ---- Phase functions (Henyey-Greenstein; g = 0 is isotropic) ----
+// cosTheta between the propagation direction before and after scattering.
+float phaseHG(float cosTheta, float g) {
+    float denom = 1.0 + g * g - 2.0 * g * cosTheta;
+    return (1.0 - g * g) / (4.0 * kPi * denom * sqrt(denom));
+}
+
+vec3 samplePhaseHG(vec3 dir, float g, float u1, float u2) {
+    float cosTheta;
+    if (abs(g) < 1e-3) {
+        cosTheta = 1.0 - 2.0 * u1;
+    } else {
+        float s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u1);
+        cosTheta = clamp((1.0 + g * g - s * s) / (2.0 * g), -1.0, 1.0);
+    }
+    float sinTheta = sqrt(max(0.0, 1.0 - cosTheta * cosTheta));
+    float phi = 2.0 * kPi * u2;
+    vec3 t, b;
+    buildFrame(dir, t, b);
+    return normalize(t * (sinTheta * cos(phi)) + b * (sinTheta * sin(phi)) + dir * cosTheta);
+}
+
+float mediumPhaseG(uint mi) { return media[mi].phase == kPhaseHenyeyGreenstein ? media[mi].phaseG : 0.0; }
+
+// ---- Free-flight guide: optical depth drawn from the model's own free flight ----
+// Inverts 1 - F(tau) = u with F = T_ss (from a surface) or T_sm (from a medium point).
+float sampleGuideDepth(TrModel model, bool fromSurface, float u) {
+    if (model.type == kTrExponential) return -log(1.0 - u);
+    if (model.type == kTrDavis) {
+        float a = model.a.x;
+        return a * (pow(1.0 - u, -1.0 / (fromSurface ? a : a + 1.0)) - 1.0);
+    }
+    uint form = fromSurface ? kFormSurfaceSurface : kFormSurfaceMedium;
+    float target = 1.0 - u;
+    float lo = 0.0, hi = 1.0;
+    for (uint i = 0u; i < 64u && trForm(model, form, hi) > target; ++i) hi *= 2.0;
+    for (uint i = 0u; i < 32u; ++i) {
+        float mid = 0.5 * (lo + hi);
+        if (trForm(model, form, mid) > target) lo = mid;
+        else hi = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+// One camera segment of length l through medium mi. Returns true when the path scatters in the
+// medium: p is the scattering point and throughput carries the scattering weight; otherwise
+// throughput carries the weight of passing to the surface at l. A zero throughput ends the path.
+bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, inout vec3 throughput, out vec3 p,
+                         inout Rng rng) {
+    p = o;
+    TrModel model = mediumModel(mi);
+    TrSegment whole = mediumSegment(mi, o, d, l);
+    // The guide works on the part of [0, l] with density (grids: the box).
+    float t0 = (kHasGrids && media[mi].type == kMediumGrid) ? dot(whole.origin - o, d) : 0.0;
+    // The guide's homogeneous density: an 8-point comb average of the segment, drawn independently
+    // of everything else (so the pdf is fixed given it), at least 10% of the majorant so that every
+    // point with density keeps a positive pdf. Purely absorbing media never scatter (mu = 0).
+    float guideDensity = whole.densityMax;
+    if (media[mi].type != kMediumHomogeneous && whole.len > 0.0) {
+        uint lookups = 0u;
+        float average = combSum(whole, rngNext(rng), 0u, 1u, 8u, 8.0, lookups) / 8.0;
+        guideDensity = max(average, 0.1 * whole.densityMax);
+    }
+    float mu = trMaxComponent(media[mi].sigmaS) > 0.0 ? trMaxComponent(whole.sigmaT) * guideDensity : 0.0;
+    float sigmaBar = trSigmaBar(model);
+    float u = rngNext(rng);
+    if (mu > 0.0 && whole.len > 0.0) {
+        float depth = sampleGuideDepth(model, fromSurface, u);
+        float t = t0 + depth / mu;
+        if (t < t0 + whole.len) {
+            // Scatter at t
+            float pdf = mu * sigmaBar * trForm(model, trFormOf(fromSurface, false), depth);
+            p = o + d * t;
+            vec3 sigmaS = media[mi].sigmaS * mediumDensityAt(mi, p);
+            if (!(pdf > 0.0)) {
+                throughput = vec3(0.0);
+                return true;
+            }
+            throughput *= sigmaS * sigmaBar * mediumTransmittance(mi, o, d, t, fromSurface, false, rng) / pdf;
+            return true;
+        }
+    }
+    // Pass to the surface at l
+    float pass = (mu > 0.0 && whole.len > 0.0) ? trForm(model, trFormOf(fromSurface, true), mu * whole.len) : 1.0;
+    if (!(pass > 0.0)) {
+        throughput = vec3(0.0);
+        return false;
+    }
+    throughput *= mediumTransmittance(mi, o, d, l, fromSurface, true, rng) / pass;
+    return false;
+}

@@ -1,0 +1,218 @@
+// Transmittance estimators (ESTIMATORS.md section 4), one source for GLSL and C++.
+//
+// A segment is [0, length] along a ray with density d(t) and material sigma_t (per channel), so
+// tau = sigma_t * integral d. Every estimator is a strategy over one of two walkers of sample
+// positions, both counting density lookups (the work):
+//   comb walker     points l (u + i) / N, a random offset u (ray marching, debiased marching,
+//                   unbiased ray marching);
+//   tracking walker tentative collisions t += -ln(1 - u) / mu (delta, ratio, residual ratio).
+// The comb estimators evaluate any transmittance form g (transmittance.h); the trackers and
+// unbiased ray marching estimate exp(-tau) only (exponential media).
+//
+// Before including, the includer may define TR_GRID_DENSITY(segment, t), the density of a
+// kProfileGrid segment at t (medium.glsl looks the grid up); otherwise grids read as empty.
+#ifndef TELESCOPE_TRANSMITTANCE_ESTIMATORS_H
+#define TELESCOPE_TRANSMITTANCE_ESTIMATORS_H
+
+#include "shared/density_profiles.h"
+#include "shared/level_pmf.h"
+#include "shared/rng.h"
+#include "shared/transmittance.h"
+
+SHADER_NAMESPACE_BEGIN
+
+CONST uint kTrEstRayMarch = 0u;             // biased, 2^k jittered points
+CONST uint kTrEstDebiasedRayMarch = 1u;     // correlated single-term telescope over levels
+CONST uint kTrEstDeltaTracking = 2u;
+CONST uint kTrEstRatioTracking = 3u;
+CONST uint kTrEstResidualRatioTracking = 4u;
+CONST uint kTrEstUnbiasedRayMarch = 5u;     // Kettunen et al. 2021
+CONST uint kTrEstCount = 6u;
+
+// Largest comb of debiased marching: 2^kTrMaxCombLog2 points; deeper levels are marched at this
+// size (a truncation of the telescope). Why a cap at all: (1) in single precision the correction's
+// rounding error, about 1e-7 g, is divided by p(j), so its second moment grows like
+// sum_j 1e-14 / p(j); (2) lavapipe (llvmpipe) silently ends any loop after 65535 iterations per
+// SIMD group (its loop limiter), which would cut a deeper comb short. The truncation drops
+// E[D_j] = O(4^-j) for j >= 13, below 1e-8 for smooth g, with probability 0.35^(13-k) for the
+// default pmf.
+CONST uint kTrMaxCombLog2 = 14u;
+// Unbiased ray marching: highest expansion order kept (P(N >= 16) = 4^-16 with q = 1/4).
+CONST uint kTrMaxOrder = 15u;
+CONST float kTrOrderQ = 0.25f;
+
+struct TrEstimator {
+    uint type;
+    uint level;      // k: the base level (ray marching: 2^k points)
+    LevelPmf pmf;    // debiased marching: level j = k + m, m ~ pmf
+};
+
+// A segment of one medium along a ray.
+struct TrSegment {
+    DensityProfile profile;  // d(t); kProfileGrid: TR_GRID_DENSITY
+    vec3 sigmaT; float len;
+    vec3 origin; float densityMin;   // ray origin (grids)
+    vec3 dir; float densityMax;      // unit direction (grids); densityMin/Max bound d on [0, length]
+    uint medium; uint pad0; uint pad1; uint pad2;
+};
+
+FN float trDensity(TrSegment s, float t) {
+#ifdef TR_GRID_DENSITY
+    if (s.profile.type == kProfileGrid) return TR_GRID_DENSITY(s, t);
+#else
+    if (s.profile.type == kProfileGrid) return 0.0f;
+#endif
+    return profileDensity(s.profile, t);
+}
+
+FN float trMaxComponent(vec3 v) { return max(v.x, max(v.y, v.z)); }
+
+#ifdef __cplusplus
+#define TR_PRECISE
+#else
+#define TR_PRECISE precise
+#endif
+
+// ---- Comb walker: sum of d at l (u + first + i stride) / n, i < count ----
+// Compensated (Kahan) summation: the debiased correction divides rounding errors by p(j).
+FN float combSum(TrSegment s, float u, uint first, uint stride, uint count, float n, INOUT(uint) lookups) {
+    TR_PRECISE float sum = 0.0f;
+    TR_PRECISE float err = 0.0f;
+    float scale = s.len / n;
+    for (uint i = 0u; i < count; ++i) {
+        TR_PRECISE float y = trDensity(s, scale * (u + float(first + i * stride))) - err;
+        TR_PRECISE float t = sum + y;
+        err = (t - sum) - y;
+        sum = t;
+    }
+    lookups += count;
+    return sum;
+}
+
+// Biased ray marching: <tau_k> = (l / 2^k) sum d(x_i), <I(k)> = g(<tau_k>).
+FN vec3 trRayMarch(uint k, TrModel m, uint form, TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
+    float n = float(1u << k);
+    float sum = combSum(s, rngNext(rng), 0u, 1u, 1u << k, n, lookups);
+    return trForm3(m, form, s.sigmaT * (sum * s.len / n));
+}
+
+// Debiased ray marching (ESTIMATORS.md section 4): one comb of 2^(j+1) points, ordered as
+// 2^(j+1-k) interleaved sub-combs of 2^k points (sub-comb i holds points i, i + S, ...):
+//   <I(k)> = mean over sub-combs of g(tau_sub),
+//   <D_j>  = g(tau_all) - (g(tau_even) + g(tau_odd)) / 2   (even/odd = the sub-combs of even/odd i),
+//   Z      = <I(k)> + <D_j> / p(j - k).
+FN vec3 trDebiasedRayMarch(TrEstimator e, TrModel m, uint form, TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
+    uint k = e.level;
+    uint level = levelSample(e.pmf, rngNext(rng));
+    uint j = k + min(level, kTrMaxCombLog2 - 1u - min(k, kTrMaxCombLog2 - 1u));
+    float n = float(1u << (j + 1u));
+    uint subCombs = 1u << (j + 1u - k);
+    uint subPoints = 1u << k;
+    float u = rngNext(rng);
+    vec3 base = vec3(0.0f);
+    // even/odd: compensated sums over the sub-combs (rounding would not cancel in <D_j>)
+    TR_PRECISE float even = 0.0f, odd = 0.0f, evenErr = 0.0f, oddErr = 0.0f;
+    for (uint i = 0u; i < subCombs; ++i) {
+        float sub = combSum(s, u, i, subCombs, subPoints, n, lookups);
+        base += trForm3(m, form, s.sigmaT * ldexp(sub * s.len, -int(k)));
+        if ((i & 1u) == 0u) {
+            TR_PRECISE float y = sub - evenErr;
+            TR_PRECISE float t = even + y;
+            evenErr = (t - even) - y;
+            even = t;
+        } else {
+            TR_PRECISE float y = sub - oddErr;
+            TR_PRECISE float t = odd + y;
+            oddErr = (t - odd) - y;
+            odd = t;
+        }
+    }
+    base = ldexp(base, ivec3(-int(j + 1u - k)));
+    // Scalings by exact powers of two (ldexp): a device's approximate division would make tau_all
+    // and tau_even differ by rounding, which <D_j> / p(j) amplifies.
+    vec3 gAll = trForm3(m, form, s.sigmaT * ldexp((even + odd) * s.len, -int(j + 1u)));
+    vec3 gEven = trForm3(m, form, s.sigmaT * ldexp(even * s.len, -int(j)));
+    vec3 gOdd = trForm3(m, form, s.sigmaT * ldexp(odd * s.len, -int(j)));
+    vec3 d = gAll - 0.5f * (gEven + gOdd);
+    return base + d / levelProbability(e.pmf, j - k);
+}
+
+// ---- Tracking walker: tentative collisions with rate mu (majorant of sigma_t) ----
+// mode: delta (1 until a real collision per channel), ratio (prod 1 - sigma/mu), residual ratio
+// (exp(-sigma_c l) prod 1 - (sigma - sigma_c)/mu_r with sigma_c at the middle of the density
+// bounds and mu_r their half-width).
+FN vec3 trTrack(uint mode, TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
+    float sMax = trMaxComponent(s.sigmaT);
+    float control = 0.0f;
+    float mu = sMax * s.densityMax;
+    vec3 result = vec3(1.0f);
+    if (mode == kTrEstResidualRatioTracking) {
+        control = 0.5f * (s.densityMin + s.densityMax);
+        mu = sMax * 0.5f * (s.densityMax - s.densityMin);
+        result = exp(-s.sigmaT * (control * s.len));
+    }
+    if (!(mu > 0.0f)) return result;
+    float t = 0.0f;
+    for (uint guard = 0u; guard < 1000000u; ++guard) {
+        t -= log(1.0f - rngNext(rng)) / mu;
+        if (t >= s.len) break;
+        vec3 sigma = s.sigmaT * (trDensity(s, t) - control);
+        lookups += 1u;
+        if (mode == kTrEstDeltaTracking) {
+            float xi = rngNext(rng);
+            result *= vec3(xi >= sigma.x / mu ? 1.0f : 0.0f, xi >= sigma.y / mu ? 1.0f : 0.0f,
+                           xi >= sigma.z / mu ? 1.0f : 0.0f);
+            if (trMaxComponent(result) == 0.0f) break;
+        } else {
+            result *= vec3(1.0f) - sigma / mu;
+        }
+    }
+    return result;
+}
+
+// ---- Unbiased ray marching (Kettunen, d'Eon, Pantaleoni, Novak 2021), our reading ----
+// exp(-tau) = exp(-X_p) sum_k (X_p - tau)^k / k! around a pivot comb estimate X_p; each power is
+// a product of independent comb estimates (X_p - X_i); the order N is Russian-rouletted with
+// P(N >= k) = q^k (most samples stop at order 0), and the estimate averages all N + 1 choices of
+// the pivot (a U-statistic; for each pivot the order-k term uses the first k other combs):
+//   Z = 1/(N+1) sum_p exp(-X_p) sum_{k<=N} prod_{i in first k others} (X_p - X_i) / (k! q^k).
+// Each comb has M points, M from the density bounds so that a comb's error stays below ~1/2.
+// Constant density: every X_i = tau, so Z = exp(-tau) exactly (zero variance).
+FN vec3 trUnbiasedRayMarch(TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
+    float spread = trMaxComponent(s.sigmaT) * (s.densityMax - s.densityMin) * s.len;
+    uint points = uint(clamp(ceil(2.0f * spread), 1.0f, 256.0f));
+    uint order = 0u;
+    while (order < kTrMaxOrder && rngNext(rng) < kTrOrderQ) ++order;
+    vec3 x[kTrMaxOrder + 1u];
+    for (uint i = 0u; i <= order; ++i)
+        x[i] = s.sigmaT * (combSum(s, rngNext(rng), 0u, 1u, points, float(points), lookups) * s.len / float(points));
+    vec3 total = vec3(0.0f);
+    for (uint p = 0u; p <= order; ++p) {
+        vec3 series = vec3(1.0f);
+        vec3 product = vec3(1.0f);
+        float weight = 1.0f;  // 1 / (k! q^k)
+        uint k = 0u;
+        for (uint i = 0u; i <= order; ++i) {
+            if (i == p) continue;
+            ++k;
+            product *= x[p] - x[i];
+            weight /= float(k) * kTrOrderQ;
+            series += product * weight;
+        }
+        total += exp(-x[p]) * series;
+    }
+    return total / float(order + 1u);
+}
+
+// ---- Dispatch over the estimators ----
+FN vec3 trEstimate(TrEstimator e, TrModel m, uint form, TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
+    if (!(s.len > 0.0f)) return vec3(trForm(m, form, 0.0f));
+    if (e.type == kTrEstRayMarch) return trRayMarch(e.level, m, form, s, rng, lookups);
+    if (e.type == kTrEstDebiasedRayMarch) return trDebiasedRayMarch(e, m, form, s, rng, lookups);
+    if (e.type == kTrEstUnbiasedRayMarch) return trUnbiasedRayMarch(s, rng, lookups);
+    return trTrack(e.type, s, rng, lookups);
+}
+
+SHADER_NAMESPACE_END
+
+#endif

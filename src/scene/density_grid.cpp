@@ -1,0 +1,102 @@
+#include "scene/density_grid.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace telescope {
+
+namespace {
+
+uint32_t hash3(int32_t x, int32_t y, int32_t z, uint32_t seed) {
+    uint32_t h = seed * 0x9E3779B9u;
+    for (uint32_t v : {uint32_t(x), uint32_t(y), uint32_t(z)}) {
+        h ^= v + 0x7F4A7C15u + (h << 6) + (h >> 2);
+        h *= 0x85EBCA6Bu;
+        h ^= h >> 13;
+    }
+    return h;
+}
+
+float lattice(int32_t x, int32_t y, int32_t z, uint32_t seed) { return float(hash3(x, y, z, seed) >> 8) / 16777216.0f; }
+
+float smooth(float t) { return t * t * (3.0f - 2.0f * t); }
+
+// Value noise in [0, 1): smoothed trilinear interpolation of lattice values.
+float valueNoise(glm::vec3 p, uint32_t seed) {
+    glm::vec3 f = glm::floor(p);
+    glm::ivec3 i(f);
+    glm::vec3 t = p - f;
+    glm::vec3 s(smooth(t.x), smooth(t.y), smooth(t.z));
+    float v = 0.0f;
+    for (int dz = 0; dz < 2; ++dz)
+        for (int dy = 0; dy < 2; ++dy)
+            for (int dx = 0; dx < 2; ++dx) {
+                float w = (dx ? s.x : 1 - s.x) * (dy ? s.y : 1 - s.y) * (dz ? s.z : 1 - s.z);
+                v += w * lattice(i.x + dx, i.y + dy, i.z + dz, seed);
+            }
+    return v;
+}
+
+}  // namespace
+
+DensityGrid proceduralCloud(const ProceduralCloudSettings& c) {
+    DensityGrid g;
+    g.resolution = c.resolution;
+    g.source = "procedural_cloud";
+    g.density.assign(size_t(c.resolution.x) * c.resolution.y * c.resolution.z, 0.0f);
+    float maxValue = 0.0f;
+    for (uint32_t z = 0; z < c.resolution.z; ++z)
+        for (uint32_t y = 0; y < c.resolution.y; ++y)
+            for (uint32_t x = 0; x < c.resolution.x; ++x) {
+                // p in [-1, 1]^3
+                glm::vec3 p = (glm::vec3(x, y, z) + 0.5f) / glm::vec3(c.resolution) * 2.0f - 1.0f;
+                float n = 0.0f, amplitude = 0.5f, norm = 0.0f;
+                glm::vec3 q = p * c.frequency;
+                for (uint32_t o = 0; o < c.octaves; ++o) {
+                    n += amplitude * valueNoise(q, c.seed + o);
+                    norm += amplitude;
+                    amplitude *= 0.5f;
+                    q *= 2.03f;
+                }
+                n /= norm;
+                // Soft ellipsoid, flatter at the bottom like a cumulus.
+                glm::vec3 e = p * glm::vec3(1.0f, p.y < 0.0f ? 1.6f : 1.15f, 1.0f);
+                float r = glm::length(e);
+                float shape = std::clamp((1.0f - r) / 0.45f, 0.0f, 1.0f);
+                float d = std::max(0.0f, n * shape + 0.35f * shape - c.coverage);
+                g.density[(size_t(z) * c.resolution.y + y) * c.resolution.x + x] = d;
+                maxValue = std::max(maxValue, d);
+            }
+    if (maxValue > 0.0f)
+        for (float& d : g.density) d /= maxValue;
+    return g;
+}
+
+DensityGrid constantGrid(glm::uvec3 resolution, float value) {
+    DensityGrid g;
+    g.resolution = resolution;
+    g.source = "constant";
+    g.density.assign(size_t(resolution.x) * resolution.y * resolution.z, value);
+    return g;
+}
+
+float sampleGrid(const DensityGrid& grid, glm::vec3 unit) {
+    if (unit.x < 0 || unit.y < 0 || unit.z < 0 || unit.x > 1 || unit.y > 1 || unit.z > 1) return 0.0f;
+    glm::vec3 res(grid.resolution);
+    glm::vec3 c = glm::clamp(unit * res - 0.5f, glm::vec3(0.0f), res - 1.0f);
+    glm::uvec3 i0(glm::floor(c));
+    glm::uvec3 i1 = glm::min(i0 + 1u, grid.resolution - 1u);
+    glm::vec3 t = c - glm::vec3(i0);
+    auto at = [&](uint32_t x, uint32_t y, uint32_t z) {
+        return grid.density[(size_t(z) * grid.resolution.y + y) * grid.resolution.x + x];
+    };
+    float v = 0.0f;
+    for (int dz = 0; dz < 2; ++dz)
+        for (int dy = 0; dy < 2; ++dy)
+            for (int dx = 0; dx < 2; ++dx)
+                v += (dx ? t.x : 1 - t.x) * (dy ? t.y : 1 - t.y) * (dz ? t.z : 1 - t.z) *
+                     at(dx ? i1.x : i0.x, dy ? i1.y : i0.y, dz ? i1.z : i0.z);
+    return v;
+}
+
+}  // namespace telescope

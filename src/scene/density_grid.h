@@ -1,0 +1,29 @@
+// Voxel density grids for grid media: a procedural cloud generator for our own scenes and a
+// constant grid (the test that a grid renders like the homogeneous medium). Densities are
+// relative (the medium's sigma_a and sigma_s scale them); a grid fills an axis-aligned box.
+#pragma once
+
+#include <cstdint>
+
+#include "scene/scene.h"
+
+namespace telescope {
+
+struct ProceduralCloudSettings {
+    glm::uvec3 resolution{64};
+    uint32_t seed = 1;
+    float frequency = 3.0f;  // noise cells across the box
+    float coverage = 0.45f;  // noise threshold: larger = sparser cloud
+    uint32_t octaves = 4;
+};
+
+// fBm value noise carved by a soft ellipsoid, scaled to a maximum density of 1.
+DensityGrid proceduralCloud(const ProceduralCloudSettings& settings);
+
+DensityGrid constantGrid(glm::uvec3 resolution, float value);
+
+// Trilinear lookup at a point of the unit box [0,1]^3 (voxel centres at (i + 1/2) / res, clamped
+// at the faces), as medium.glsl does it; 0 outside.
+float sampleGrid(const DensityGrid& grid, glm::vec3 unit);
+
+}  // namespace telescope
