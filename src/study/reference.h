@@ -16,7 +16,8 @@ struct UnbiasedSetup {
 
 // The path tracer gets the Russian-roulette sum estimator over path depth at its own max_bounces
 // (plain path tracing with Russian roulette: it only adds the rare deeper paths) unless it has a
-// debias block already.
+// debias block already. Photon mapping (biased or progressive) gets its unbiased variant: the
+// debias block over radius levels.
 UnbiasedSetup unbiasedSetup(const Scene& scene);
 
 }  // namespace telescope
