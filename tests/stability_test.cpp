@@ -277,4 +277,55 @@ TEST_F(Stability, NoEmissionAnywhere) {
     for (size_t i = 0; i < film.pixelCount(); ++i) ASSERT_EQ(film.mean(shader::kChannelEstimate, i), glm::dvec3(0.0));
 }
 
+// ---- Photon mapping: gather radii at the edges, empty photon maps ----
+// The plane scene is 20 units wide; the light (I = 1) is 1 unit above it.
+
+Film renderPhotons(const std::vector<SceneOverride>& extra, uint64_t spp, uint32_t seed, json* edit = nullptr) {
+    json j = readJson("scenes/point-plane-photon.json");
+    if (edit) j = *edit;
+    std::vector<SceneOverride> o = {{"camera.resolution", "[16,16]"}, {"integrator.photon_count", "20000"}};
+    o.insert(o.end(), extra.begin(), extra.end());
+    return renderFilm(sceneFromJson(j, "point-plane-photon", o), spp, seed);
+}
+
+TEST_F(Stability, PhotonGatherRadiusTiny) {
+    // 1e-7 of the scene: almost every gather is empty, the rare photon weighs 1 / (pi r^2) ~ 1e11.
+    expectFinite(renderPhotons({{"integrator.gather_radius", "2e-6"}}, 4, 41), "unbiased PM, r_1 = 2e-6");
+    expectFinite(renderPhotons({{"integrator.gather_radius", "2e-6"}, {"integrator.debias", "null"}}, 4, 42),
+                 "biased PM, r = 2e-6");
+}
+
+TEST_F(Stability, PhotonGatherRadiusHuge) {
+    // 1e3 of the scene: every photon lands in every gather; one hash cell holds the whole map.
+    Film film = renderPhotons({{"integrator.gather_radius", "2e4"}, {"integrator.debias", "null"}}, 2, 43);
+    expectFinite(film, "biased PM, r = 2e4");
+    // Every photon on the plane is in every gather, at distance << r where the cone kernel is
+    // 3 / (pi r^2): L = albedo / pi * Phi_plane * 3 / (pi r^2), with Phi_plane = I * Omega and the
+    // solid angle of the 20 x 20 square seen from 1 above its centre Omega = 4 asin(100 / 101).
+    const double omega = 4.0 * std::asin(100.0 / 101.0), r = 2e4;
+    const double expected = 0.5 / M_PI * omega * 3.0 / (M_PI * r * r);
+    for (size_t i = 0; i < film.pixelCount(); ++i)
+        ASSERT_NEAR(film.mean(shader::kChannelEstimate, i).x / expected, 1.0, 0.05) << "pixel " << i;
+    expectFinite(renderPhotons({{"integrator.gather_radius", "2e4"}}, 2, 44), "unbiased PM, r_1 = 2e4");
+}
+
+TEST_F(Stability, EmptyPhotonMap) {
+    // A light with no power stores no photon: every gather is empty, the image is black.
+    json j = readJson("scenes/point-plane-photon.json");
+    for (auto& p : j["primitives"])
+        if (p["type"] == "point") p["power"] = 0.0;
+    Film film = renderPhotons({}, 2, 45, &j);
+    expectFinite(film, "no photons");
+    for (size_t i = 0; i < film.pixelCount(); ++i) ASSERT_EQ(film.mean(shader::kChannelEstimate, i), glm::dvec3(0.0));
+}
+
+TEST_F(Stability, PhotonsOnlyBehindTheSurface) {
+    // The light below the plane: every photon arrives from the back side and is rejected.
+    json j = readJson("scenes/point-plane-photon.json");
+    for (auto& p : j["primitives"])
+        if (p["type"] == "point") p["transform"]["position"] = {0.0, -1.0, 0.0};
+    Film film = renderPhotons({{"integrator.enable_two_sided_shading", "false"}}, 2, 46, &j);
+    expectFinite(film, "photons behind the plane");
+}
+
 }  // namespace
