@@ -219,3 +219,32 @@ TEST_F(PhotonRender, SixteenMillionPhotons) {
     // The centre regions: the biased estimate at r = 0.02 is within a few percent.
     for (size_t r : {5, 6, 9, 10}) EXPECT_NEAR(regions[r].mean.x, want[r], 0.03 * want[r]) << "region " << r;
 }
+
+TEST_F(PhotonRender, CausticCornellBoxAgreesWithThePathTracer) {
+    // Progressive photon mapping with next-event direct light (caustics and indirect light from
+    // photons) against the path tracer with the sum estimator: the whole image and the floor under
+    // the glass sphere (the caustic) agree within a few percent.
+    const char* kCaustic = "scenes/cornell-box-caustic.json";
+    Scene ppm = loadTestScene(kCaustic, {{"camera.resolution", "[48,48]"},
+                                         {"integrator.type", R"("progressive_photon_map")"},
+                                         {"integrator.debias", "null"},
+                                         {"integrator.photon_count", "60000"},
+                                         {"integrator.gather_radius", "0.04"}});
+    Scene pt = loadTestScene(kCaustic, {{"camera.resolution", "[48,48]"},
+                                        {"integrator.type", R"("path_tracer")"},
+                                        {"integrator.debias", R"({"estimator":"sum"})"}});
+    Film a = renderFilm(ppm, 16, 700), b = renderFilm(pt, 128, 701);
+    auto mean = [](const Film& f, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h) {
+        glm::dvec3 m(0.0);
+        for (uint32_t y = y0; y < y0 + h; ++y)
+            for (uint32_t x = x0; x < x0 + w; ++x) m += f.mean(shader::kChannelEstimate, size_t(y) * f.width() + x);
+        return m / double(w * h);
+    };
+    glm::dvec3 imageA = mean(a, 0, 0, 48, 48), imageB = mean(b, 0, 0, 48, 48);
+    glm::dvec3 causticA = mean(a, 26, 38, 12, 6), causticB = mean(b, 26, 38, 12, 6);
+    std::printf("image %.4f %.4f (PPM, PT), caustic %.4f %.4f (red)\n", imageA.x, imageB.x, causticA.x, causticB.x);
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(imageA[c], imageB[c], 0.04 * imageB[c]) << "channel " << c;
+        EXPECT_NEAR(causticA[c], causticB[c], 0.08 * causticB[c]) << "channel " << c;
+    }
+}
