@@ -145,6 +145,18 @@ TEST_F(PhotonRender, UnbiasedProgressiveMatchesTheAnalyticPlane) {
     EXPECT_EQ(t.signFailures, 0u) << t.worst;
 }
 
+TEST_F(PhotonRender, UnbiasedGeometricLevelsAndOtherKernelsMatchTheAnalyticPlane) {
+    for (const char* kernel : {"epanechnikov", "uniform"}) {
+        BatchTest t = batchMeansTest(
+            plane(fmt::format(R"({{"type":"photon_map","photon_count":20000,"gather_radius":0.1,"direct_lighting":"photons",
+                              "kernel":"{}","debias":{{"estimator":"single_term","pmf":{{"type":"geometric","r":0.5}}}}}})",
+                              kernel)),
+            32, 4, 250);
+        EXPECT_EQ(t.tFailures, 0u) << kernel << ": " << t.worst;
+        EXPECT_EQ(t.signFailures, 0u) << kernel << ": " << t.worst;
+    }
+}
+
 TEST_F(PhotonRender, BiasedLargeRadiusFailsTheSameTest) {
     BatchTest t = batchMeansTest(
         plane(R"({"type":"photon_map","photon_count":20000,"gather_radius":0.5,"direct_lighting":"photons"})"), 32, 4, 300);
