@@ -14,6 +14,7 @@
 #include <functional>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "region_stats.h"
@@ -326,6 +327,99 @@ TEST_F(Stability, PhotonsOnlyBehindTheSurface) {
         if (p["type"] == "point") p["transform"]["position"] = {0.0, -1.0, 0.0};
     Film film = renderPhotons({{"integrator.enable_two_sided_shading", "false"}}, 2, 46, &j);
     expectFinite(film, "photons behind the plane");
+}
+
+// ---- Participating media: optical depths from 1e-6 to 1e4, Davis near its limits, empty media ----
+// scenes/absorbing-slab.json: the top half of the frame sees an emitter (Le = 1) through a slab
+// of constant density, thickness 1; the bottom half through an exponential-falloff slab.
+
+const char* const kAllTransmittanceEstimators[] = {
+    R"({"type":"ray_march","level":2})", R"({"type":"debiased_ray_march","level":1})",
+    R"({"type":"delta_tracking"})",       R"({"type":"ratio_tracking"})",
+    R"({"type":"residual_ratio_tracking"})", R"({"type":"unbiased_ray_march","level":2})"};
+
+Film renderSlab(const std::string& estimator, double constantDensity, double falloffDensity,
+                const std::string& model = R"({"type":"exponential"})", uint64_t spp = 4) {
+    Scene scene = loadTestScene("scenes/absorbing-slab.json",
+                                {{"camera.resolution", "[16,16]"},
+                                 {"media[0].density", fmt::format("{}", constantDensity)},
+                                 {"media[1].density", fmt::format("{}", falloffDensity)},
+                                 {"media[0].transmittance", model},
+                                 {"media[1].transmittance", model},
+                                 {"integrator.transmittance_estimator", estimator}});
+    return renderFilm(scene, spp, 51);
+}
+
+// Mean of the estimate over the top half (the constant slab) and over the bottom half.
+std::pair<double, double> halfMeans(const Film& film) {
+    double top = 0.0, bottom = 0.0;
+    const size_t half = film.pixelCount() / 2;
+    for (size_t i = 0; i < film.pixelCount(); ++i) (i < half ? top : bottom) += film.mean(shader::kChannelEstimate, i).x;
+    return {top / double(half), bottom / double(film.pixelCount() - half)};
+}
+
+TEST_F(Stability, OpticalDepthTiny) {
+    // tau = 1e-6: every estimator returns Le (1 - tau / cos) to within 1e-4.
+    for (const char* estimator : kAllTransmittanceEstimators) {
+        Film film = renderSlab(estimator, 1e-6, 1e-6);
+        expectFinite(film, estimator);
+        auto [top, bottom] = halfMeans(film);
+        EXPECT_NEAR(top, 1.0, 1e-4) << estimator;
+        EXPECT_NEAR(bottom, 1.0, 1e-4) << estimator;
+    }
+}
+
+TEST_F(Stability, OpticalDepthHuge) {
+    // tau = 1e4: exp(-1e4) underflows; every estimator returns 0 (or a finite, tiny value).
+    for (const char* estimator : kAllTransmittanceEstimators) {
+        Film film = renderSlab(estimator, 1e4, 1e4);
+        expectFinite(film, estimator);
+        auto [top, bottom] = halfMeans(film);
+        EXPECT_LT(std::abs(top), 1e-6) << estimator;
+        EXPECT_LT(std::abs(bottom), 1e-6) << estimator;
+    }
+}
+
+TEST_F(Stability, ZeroDensityMedium) {
+    // A medium of density 0 is vacuum: exactly Le.
+    for (const char* estimator : kAllTransmittanceEstimators) {
+        Film film = renderSlab(estimator, 0.0, 0.0);
+        expectFinite(film, estimator);
+        auto [top, bottom] = halfMeans(film);
+        EXPECT_NEAR(top, 1.0, 1e-6) << estimator;
+        EXPECT_NEAR(bottom, 1.0, 1e-6) << estimator;
+    }
+}
+
+TEST_F(Stability, DavisNearItsLimits) {
+    // T(tau) = (1 + tau / alpha)^-alpha: alpha = 1e-3 is nearly transparent far out (heavy tail),
+    // alpha = 1e6 is the exponential. Debiased marching and biased marching stay finite, and the
+    // debiased estimate on the constant slab matches the closed form within 5%.
+    for (double alpha : {1e-3, 1e6}) {
+        const std::string model = fmt::format(R"({{"type":"davis","alpha":{}}})", alpha);
+        for (const char* estimator : {kAllTransmittanceEstimators[0], kAllTransmittanceEstimators[1]}) {
+            Film film = renderSlab(estimator, 1.2, 3.0, model, 16);
+            expectFinite(film, model + " " + estimator);
+        }
+        Film film = renderSlab(kAllTransmittanceEstimators[1], 1.2, 3.0, model, 64);
+        // The centre rows look along the normal (tau = 1.2 / cos, cos > 0.98 near the centre).
+        const double t = std::pow(1.0 + 1.2 / alpha, -alpha);
+        const glm::dvec3 centre = film.mean(shader::kChannelEstimate, 7 * 16 + 8);
+        EXPECT_NEAR(centre.x / t, 1.0, 0.05) << model;
+    }
+}
+
+TEST_F(Stability, MediaListedButUnused) {
+    // Media nobody references: the plan folds the volume code out; the image is Le everywhere.
+    Scene scene = loadTestScene("scenes/absorbing-slab.json",
+                                {{"camera.resolution", "[16,16]"},
+                                 {"primitives[0].int_medium", "null"},
+                                 {"primitives[1].int_medium", "null"}});
+    Film film = renderFilm(scene, 4, 53);
+    expectFinite(film, "unused media");
+    auto [top, bottom] = halfMeans(film);
+    EXPECT_NEAR(top, 1.0, 1e-6);
+    EXPECT_NEAR(bottom, 1.0, 1e-6);
 }
 
 }  // namespace

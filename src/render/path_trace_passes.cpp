@@ -12,11 +12,10 @@ namespace telescope {
 
 // ---- Plan ----
 namespace {
-// The transmittance model type every medium shares (simple models only), else 0xffffffff: a
-// specialisation constant that keeps only that model's code in path_trace.
+// The transmittance model type every medium shares (simple models only), else 0xffffffff.
 uint32_t sharedTransmittanceModel(const Scene& scene) {
     if (scene.media.empty()) return 0;
-    const uint32_t type = scene.media[0].transmittance.type;
+    uint32_t type = scene.media[0].transmittance.type;
     for (const Medium& m : scene.media)
         if (m.transmittance.type != type) return 0xffffffffu;
     return type == shader::kTrInterpolated ? 0xffffffffu : type;
@@ -32,15 +31,16 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
                            "accumulated per pixel"});
     plan.skipped.push_back({"photon_trace, hash_grid_build, gather", "the integrator does not use photons"});
     if (f.media) {
-        // ---- Participating media (docs/MEDIA.md): inside path_trace, folded out without media ----
         const auto& t = in.transmittance;
         std::string how = transmittanceEstimatorName(t.type);
         if (t.type == TransmittanceEstimatorType::RayMarch) how += fmt::format(" (2^{} points, biased)", t.level);
         if (t.type == TransmittanceEstimatorType::DebiasedRayMarch)
             how += fmt::format(" (base level {}, {})", t.level, pmfDescription(t.pmf));
-        plan.passes.back().why += fmt::format("; volumetric path tracing through {} medi{} (single and multiple "
-                                              "scattering, next-event estimation), every transmittance by {}",
-                                              f.mediumCount, f.mediumCount == 1 ? "um" : "a", how);
+        plan.passes[0].why += fmt::format("; volumetric path tracing through {} medi{} (single and multiple scattering, "
+                                          "next-event estimation), every transmittance by {}",
+                                          f.mediumCount, f.mediumCount == 1 ? "um" : "a", how);
+    } else {
+        plan.skipped.push_back({"volume tracking", "the scene has no participating media: volume code folded out of path_trace"});
     }
 
     // ---- Level schedule: only a debiased render (not the pilot) has levels to schedule ----

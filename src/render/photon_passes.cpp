@@ -75,6 +75,7 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
                            fmt::format("camera paths through specular bounces to the first diffuse vertex, one "
                                        "traversal of the 2x2x2 cells ({} kernel){}",
                                        kernelName(ph.kernel), nee ? ", direct light by next-event estimation" : "")});
+    plan.skipped.push_back({"volume tracking", "photon mapping scenes have no participating media (the loader rejects them)"});
     plan.skipped.push_back({"path_trace", fmt::format("the integrator is '{}'",
                                                       progressive(in) ? "progressive_photon_map" : "photon_map")});
 

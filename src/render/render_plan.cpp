@@ -23,8 +23,6 @@ RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
     RenderPlan plan;
     if (usesPhotons(scene.integrator)) planPhotons(scene, f, plan);
     else planPathTrace(scene, f, plan);
-    if (!f.media)
-        plan.skipped.push_back({"volume tracking", "the scene has no participating media: volume code folded out of path_trace"});
     return plan;
 }
 

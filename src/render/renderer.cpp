@@ -33,7 +33,7 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
     nodes_ = makeBuffer(gpuScene_.nodes, "bvh nodes");
     materials_ = makeBuffer(gpuScene_.materials, "materials");
     lights_ = makeBuffer(gpuScene_.lights, "lights");
-    media_ = makeBuffer(gpuScene_.media, "media");
+    media_ = makeBuffer(gpuScene_.media, "media");  // dummies without media
     gridData_ = makeBuffer(gpuScene_.gridData, "grid data");
     primMedia_ = makeBuffer(gpuScene_.primMedia, "prim media");
 

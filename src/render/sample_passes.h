@@ -18,14 +18,15 @@
 
 namespace telescope {
 
-// Buffers every integrator reads: the scene (bindings 0..3) and the accumulation (by address).
+// Buffers the integrators read: the scene (bindings 0..3), the accumulation (by address) and the
+// media (path tracer only).
 struct RenderBuffers {
     const gpu::Buffer* prims = nullptr;
     const gpu::Buffer* nodes = nullptr;
     const gpu::Buffer* materials = nullptr;
     const gpu::Buffer* lights = nullptr;
     const gpu::Buffer* accum = nullptr;
-    // Participating media (path tracer, bindings 4..6; dummies for scenes without media)
+    // Participating media (bindings 4..6 of path_trace).
     const gpu::Buffer* media = nullptr;
     const gpu::Buffer* gridData = nullptr;
     const gpu::Buffer* primMedia = nullptr;

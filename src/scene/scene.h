@@ -131,13 +131,6 @@ struct DebiasSettings {
     LevelSchedule schedule = LevelSchedule::PerPixel;
 };
 
-// "transmittance_estimator": {"type": ..., "level": k, "pmf": {...}} (docs/MEDIA.md).
-struct TransmittanceEstimatorSettings {
-    TransmittanceEstimatorType type = TransmittanceEstimatorType::DebiasedRayMarch;
-    uint32_t level = 1;  // ray marching: 2^k points; debiased: the base level k
-    PmfSettings pmf;     // debiased: geometric or power law (levels above k)
-};
-
 enum class IntegratorType : uint32_t { PathTracer = 0, PhotonMap = 1, ProgressivePhotonMap = 2 };
 
 // Photon mapping (ESTIMATORS.md section 3). Tungsten's key names where Tungsten has the setting.
@@ -151,6 +144,13 @@ struct PhotonSettings {
     PhotonKernel kernel = PhotonKernel::Cone;             // "kernel"
     DirectLighting directLighting = DirectLighting::NextEvent;  // "direct_lighting"
 };
+// "transmittance_estimator": {"type": ..., "level": k, "pmf": {...}} (docs/MEDIA.md).
+struct TransmittanceEstimatorSettings {
+    TransmittanceEstimatorType type = TransmittanceEstimatorType::DebiasedRayMarch;
+    uint32_t level = 1;  // ray marching: 2^k points; debiased: the base level k
+    PmfSettings pmf;     // debiased: geometric or power law (levels above k)
+};
+
 
 struct IntegratorSettings {
     IntegratorType type = IntegratorType::PathTracer;
@@ -159,9 +159,9 @@ struct IntegratorSettings {
     bool enableLightSampling = true;
     bool enableTwoSidedShading = true;
     DebiasSettings debias;
+    PhotonSettings photon;  // photon_map and progressive_photon_map only
     // "transmittance_estimator": how every transmittance factor of a path is estimated.
     TransmittanceEstimatorSettings transmittance;
-    PhotonSettings photon;  // photon_map and progressive_photon_map only
     // Set by the pmf pilot only (not a scene key): every sample takes this level and records the
     // unweighted correction D_j instead of its estimate, with no base.
     uint32_t pilotLevel = kNoPilotLevel;

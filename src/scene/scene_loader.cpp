@@ -1154,7 +1154,9 @@ void SceneReader::readTransmittanceEstimator(const json& v, const std::string& k
 // The trackers and unbiased ray marching estimate exp(-tau) only.
 void SceneReader::checkEstimatorFitsMedia(const json& doc) const {
     if (usesPhotons(scene_.integrator) && !scene_.media.empty())
-        fail("integrator.type", "participating media are rendered by the path_tracer integrator only, not by photon mapping");
+        fail("media", fmt::format("the '{}' integrator does not support participating media (use path_tracer)",
+                                  scene_.integrator.type == IntegratorType::PhotonMap ? "photon_map"
+                                                                                     : "progressive_photon_map"));
     const TransmittanceEstimatorType t = scene_.integrator.transmittance.type;
     if (t == TransmittanceEstimatorType::RayMarch || t == TransmittanceEstimatorType::DebiasedRayMarch) return;
     for (size_t i = 0; i < scene_.media.size(); ++i)

@@ -16,8 +16,8 @@ struct UnbiasedSetup {
 
 // The path tracer gets the Russian-roulette sum estimator over path depth at its own max_bounces
 // (plain path tracing with Russian roulette: it only adds the rare deeper paths) unless it has a
-// debias block already. Photon mapping (biased or progressive) gets its unbiased variant: the
-// debias block over radius levels.
+// debias block already. Photon scenes are rendered by the path tracer with that sum estimator:
+// unbiased photon mapping has a Cauchy-like per-pixel error (docs/PHOTON-MAPPING.md).
 UnbiasedSetup unbiasedSetup(const Scene& scene);
 
 }  // namespace telescope

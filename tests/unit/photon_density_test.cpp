@@ -129,12 +129,12 @@ TEST(PhotonLevels, TruncationOnlyBeyondTheRadiusFloor) {
     EXPECT_EQ(levelSampleFrom(pmf, 1.0f, 1.0f - std::ldexp(1.0f, -24), 1.0f - std::ldexp(1.0f, -16)), 0.0f);
 }
 
-TEST(PhotonGrid, NegativeCoordinatesRoundDown) {
+TEST(PhotonGridCells, NegativeCoordinatesRoundDown) {
     EXPECT_EQ(gridCell(glm::vec3(-0.1f, 0.1f, -2.5f), 1.0f), glm::ivec3(-1, 0, -3));
     EXPECT_EQ(gridCell(glm::vec3(1e30f, -1e30f, 0.0f), 1e-4f), glm::ivec3(1 << 30, -(1 << 30), 0));
 }
 
-TEST(PhotonGrid, NeighbourhoodCoversTheHalfCellBall) {
+TEST(PhotonGridCells, NeighbourhoodCoversTheHalfCellBall) {
     Rng rng = rngCreate(1, 2, 3);
     const float cell = 0.4f, r = 0.2f;
     for (int i = 0; i < 20000; ++i) {
@@ -146,7 +146,7 @@ TEST(PhotonGrid, NeighbourhoodCoversTheHalfCellBall) {
     }
 }
 
-TEST(PhotonGrid, HashStaysInTheTable) {
+TEST(PhotonGridCells, HashStaysInTheTable) {
     for (int x = -3; x <= 3; ++x)
         for (int y : {-(1 << 30), -1, 0, 1 << 30}) EXPECT_LT(gridHash(glm::ivec3(x, y, 7), 1024u), 1024u);
 }
