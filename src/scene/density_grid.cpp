@@ -80,6 +80,16 @@ DensityGrid constantGrid(glm::uvec3 resolution, float value) {
     return g;
 }
 
+DensityGrid linearGrid(glm::uvec3 resolution, float from, float to) {
+    DensityGrid g = constantGrid(resolution, from);
+    g.source = "linear";
+    for (uint32_t z = 0; z < resolution.z; ++z) {
+        const float v = resolution.z > 1 ? from + (to - from) * float(z) / float(resolution.z - 1) : from;
+        for (size_t i = 0; i < size_t(resolution.x) * resolution.y; ++i) g.density[z * size_t(resolution.x) * resolution.y + i] = v;
+    }
+    return g;
+}
+
 float sampleGrid(const DensityGrid& grid, glm::vec3 unit) {
     if (unit.x < 0 || unit.y < 0 || unit.z < 0 || unit.x > 1 || unit.y > 1 || unit.z > 1) return 0.0f;
     glm::vec3 res(grid.resolution);

@@ -22,6 +22,10 @@ DensityGrid proceduralCloud(const ProceduralCloudSettings& settings);
 
 DensityGrid constantGrid(glm::uvec3 resolution, float value);
 
+// Density varying linearly along the grid's z: voxel layer k holds from + (to - from) k / (n - 1),
+// so the trilinear lookup is exactly linear between the first and the last layer's centres.
+DensityGrid linearGrid(glm::uvec3 resolution, float from, float to);
+
 // Trilinear lookup at a point of the unit box [0,1]^3 (voxel centres at (i + 1/2) / res, clamped
 // at the faces), as medium.glsl does it; 0 outside.
 float sampleGrid(const DensityGrid& grid, glm::vec3 unit);

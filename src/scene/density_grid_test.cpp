@@ -53,3 +53,14 @@ TEST(DensityGrid, TrilinearLookup) {
 
 }  // namespace
 }  // namespace telescope
+
+namespace telescope {
+namespace {
+TEST(DensityGrid, LinearGridIsLinearBetweenLayerCentres) {
+    DensityGrid g = linearGrid(glm::uvec3(2, 2, 3), 0.4f, 2.0f);
+    // Layer centres at unit z = 1/6, 1/2, 5/6.
+    for (float z = 1.0f / 6.0f; z <= 5.0f / 6.0f; z += 0.05f)
+        EXPECT_NEAR(sampleGrid(g, glm::vec3(0.3f, 0.7f, z)), 0.4f + 1.6f * (z - 1.0f / 6.0f) / (2.0f / 3.0f), 1e-5f);
+}
+}  // namespace
+}  // namespace telescope

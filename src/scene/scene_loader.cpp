@@ -1062,8 +1062,9 @@ DensityGrid SceneReader::readGrid(const json& v, const std::string& key) {
     if (type == "vdb")
         fail(member(key, "type"), "OpenVDB grids are not supported by this build of Telescope (no libopenvdb); "
                                   "use a \"procedural_cloud\" or \"constant\" grid");
-    if (type != "procedural_cloud" && type != "constant")
-        fail(member(key, "type"), fmt::format("unknown grid type '{}' (expected \"procedural_cloud\" or \"constant\")", type));
+    if (type != "procedural_cloud" && type != "constant" && type != "linear")
+        fail(member(key, "type"),
+             fmt::format("unknown grid type '{}' (expected \"procedural_cloud\", \"constant\" or \"linear\")", type));
     glm::uvec3 res(32);
     if (const json* r = find(v, "resolution")) {
         const std::string rk = member(key, "resolution");
@@ -1075,7 +1076,15 @@ DensityGrid SceneReader::readGrid(const json& v, const std::string& key) {
         }
     }
     DensityGrid g;
-    if (type == "constant") {
+    if (type == "linear") {
+        auto value = [&](const char* field) {
+            const float x = find(v, field) ? number(v[field], member(key, field)) : 1.0f;
+            if (x < 0.0f) fail(member(key, field), "must be non-negative");
+            return x;
+        };
+        g = linearGrid(res, value("from"), value("to"));
+        rejectUnknownKeys(v, key, {"type", "resolution", "transform", "from", "to"}, file_);
+    } else if (type == "constant") {
         const float value = find(v, "value") ? number(v["value"], member(key, "value")) : 1.0f;
         if (value < 0.0f) fail(member(key, "value"), "must be non-negative");
         g = constantGrid(res, value);
