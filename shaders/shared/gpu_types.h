@@ -102,7 +102,7 @@ CONST uint kBindingMedia = 4u;      // MediumGpu[]
 CONST uint kBindingGridData = 5u;   // float voxel densities of every grid medium
 CONST uint kBindingPrimMedia = 6u;  // uint per prim slot: media on its two sides (kPrimMedia*)
 CONST uint kPathTraceBindingCount = 7u;
-CONST uint kSceneBindingCount = 4u;      // photon_trace and gather: the scene only (no media)  // the accumulation buffer is reached by address
+CONST uint kSceneBindingCount = 4u;      // photon_trace and gather: the scene only (no media)
 
 // Specialisation constant ids: features a scene lacks are folded away by the compiler.
 CONST uint kSpecMaxBounces = 0u;

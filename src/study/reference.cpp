@@ -21,9 +21,9 @@ UnbiasedSetup unbiasedSetup(const Scene& scene) {
         s.overrides.push_back({"integrator.type", R"("path_tracer")"});
         s.overrides.push_back({"integrator.debias", R"({"estimator":"sum","pmf":{"type":"geometric","r":0.65}})"});
         s.why += fmt::format("photon scene: rendered by the path tracer with the sum estimator over path depth beyond "
-                            "max_bounces = {} (unbiased photon mapping does not converge in practice, "
-                            "docs/PHOTON-MAPPING.md)",
-                            in.maxBounces);
+                             "max_bounces = {} (unbiased photon mapping does not converge in practice, "
+                             "docs/PHOTON-MAPPING.md)",
+                             in.maxBounces);
         return s;
     }
     if (in.debias.estimator != DebiasEstimator::None) {
