@@ -100,8 +100,6 @@ PmfCandidate predictPmf(const PmfPilotResult& pilot, const PmfSettings& pmf, Deb
 }
 
 PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t seed) {
-    using Clock = std::chrono::steady_clock;
-    const auto start = Clock::now();
     PmfPilotResult result;
     const PmfSettings settings = sceneIn.integrator.debias.pmf;
     const uint32_t spp = settings.pilotSpp;
@@ -125,6 +123,7 @@ PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t
         result.baseVariance += (v.x + v.y + v.z) / (3.0 * pixels);
     }
     result.pilotGpuSeconds += gpuSeconds(baseRenderer.stats());
+    result.pilotWallSeconds += baseRenderer.stats().wallSeconds;
 
     // ---- One fixed level at a time: the unweighted correction D_j and its cost ----
     for (uint32_t m = 0; m < settings.pilotLevels; ++m) {
@@ -146,6 +145,7 @@ PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t
         const double seconds = gpuSeconds(r.stats());
         level.secondsPerPath = seconds / (double(spp) * pixels);
         result.pilotGpuSeconds += seconds;
+        result.pilotWallSeconds += r.stats().wallSeconds;
         result.levels.push_back(level);
     }
 
@@ -192,7 +192,6 @@ PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t
     }
     result.chosen.pmf.pilotSpp = settings.pilotSpp;
     result.chosen.pmf.pilotLevels = settings.pilotLevels;
-    result.pilotWallSeconds = std::chrono::duration<double>(Clock::now() - start).count();
     return result;
 }
 

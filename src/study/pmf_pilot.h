@@ -40,7 +40,8 @@ struct PmfPilotResult {
     std::vector<double> idealPmf;  // sqrt(E[D_j^2]/c_j), normalised over the measured levels
     PmfCandidate chosen, geometricDefault, powerLawDefault;
     double pilotGpuSeconds = 0.0;
-    double pilotWallSeconds = 0.0;
+    double pilotWallSeconds = 0.0;  // render time only: pipeline compilation is left out, as for
+                                    // every method's renderer in `telescope converge`
 
     std::string summary() const;  // a few lines for logs and reports
 };
