@@ -27,34 +27,12 @@ void addContribution(inout PathResult r, uint bounce, vec3 c, LevelPmf pmf, uint
     if (w > 0.0) r.correction += c * w;
 }
 
-// Offset along the geometric normal, to the side the next ray leaves from.
-vec3 offsetRayOrigin(vec3 p, vec3 ng, vec3 dir) {
-    float scale = max(max(abs(p.x), abs(p.y)), abs(p.z));
-    float eps = max(kRayEpsilon, 4e-6 * scale);
-    return p + (dot(dir, ng) >= 0.0 ? ng : -ng) * eps;
-}
+#include "scene_common.glsl"
 
 // ---- Lights ----
-uint pickLight(float u) {
-    // Smallest index whose inclusive cdf exceeds u.
-    uint lo = 0u, hi = kLightCount - 1u;
-    while (lo < hi) {
-        uint mid = (lo + hi) >> 1u;
-        if (u < lights[mid].cdf) hi = mid;
-        else lo = mid + 1u;
-    }
-    return lo;
-}
-
 // Solid-angle density with which next-event estimation picks a point on an emissive prim.
 float areaLightPdf(uint lightIndex, float area, float dist, float cosLight) {
     return lights[lightIndex].pmf * dist * dist / max(cosLight * area, 1e-30);
-}
-
-// Emitted radiance towards -dir at a point of prim with geometric normal ng (one-sided).
-vec3 primEmission(Prim pr, vec3 dir, vec3 ng) {
-    if (pr.light < 0 || dot(dir, ng) >= 0.0) return vec3(0.0);
-    return lights[uint(pr.light)].radiance;
 }
 
 // One light picked by power and a direction towards it from p: the shadow-ray length, the

@@ -26,29 +26,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer PhotonMapRe
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer PhotonArrayRef { Photon p[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer UintArrayRef { uint v[]; };
 
-// Offset along the geometric normal, to the side the next ray leaves from.
-vec3 offsetRayOrigin(vec3 p, vec3 ng, vec3 dir) {
-    float scale = max(max(abs(p.x), abs(p.y)), abs(p.z));
-    float eps = max(kRayEpsilon, 4e-6 * scale);
-    return p + (dot(dir, ng) >= 0.0 ? ng : -ng) * eps;
-}
-
-// Smallest light index whose inclusive cdf exceeds u (lights are picked by power).
-uint pickLight(float u) {
-    uint lo = 0u, hi = kLightCount - 1u;
-    while (lo < hi) {
-        uint mid = (lo + hi) >> 1u;
-        if (u < lights[mid].cdf) hi = mid;
-        else lo = mid + 1u;
-    }
-    return lo;
-}
-
-// Emitted radiance towards -dir at a point of prim with geometric normal ng (one-sided).
-vec3 primEmission(Prim pr, vec3 dir, vec3 ng) {
-    if (pr.light < 0 || dot(dir, ng) >= 0.0) return vec3(0.0);
-    return lights[uint(pr.light)].radiance;
-}
+#include "scene_common.glsl"
 
 // A uniform point on an emissive prim and its emitting normal.
 void sampleLightPoint(Prim pr, float u1, float u2, out vec3 q, out vec3 nq) {
