@@ -22,13 +22,8 @@ gpu::Context& context() {
     return ctx;
 }
 
-void pathTracing(benchmark::State& state, const std::string& debias) {
-    const int k = int(state.range(0));
-    std::vector<SceneOverride> overrides = {{"camera.resolution", "[256,256]"},
-                                            {"integrator.max_bounces", std::to_string(k)}};
-    if (!debias.empty())
-        overrides.push_back({"integrator.debias", R"({"estimator":")" + debias + R"(","pmf":{"type":"geometric","r":0.65}})"});
-    Scene scene = loadScene(std::string(TELESCOPE_SOURCE_DIR) + "/scenes/cornell-box.json", overrides);
+// Renders 16 spp of a 256x256 scene per iteration and reports paths per second.
+void pathsPerSecond(benchmark::State& state, const Scene& scene) {
     Renderer renderer(context(), scene, 1);
     RenderRequest warmup;
     warmup.spp = 4;  // first dispatch compiles the pipeline
@@ -44,6 +39,16 @@ void pathTracing(benchmark::State& state, const std::string& debias) {
     state.SetLabel(context().info().name);
 }
 
+void pathTracing(benchmark::State& state, const std::string& debias) {
+    const int k = int(state.range(0));
+    std::vector<SceneOverride> overrides = {{"camera.resolution", "[256,256]"},
+                                            {"integrator.max_bounces", std::to_string(k)}};
+    if (!debias.empty())
+        overrides.push_back({"integrator.debias", R"({"estimator":")" + debias + R"(","pmf":{"type":"geometric","r":0.65}})"});
+    Scene scene = loadScene(std::string(TELESCOPE_SOURCE_DIR) + "/scenes/cornell-box.json", overrides);
+    pathsPerSecond(state, scene);
+}
+
 // Level scheduling (debias "level_schedule"): the same debiased estimator with levels drawn per
 // pixel sample (per_pixel), sorted into a level queue first (queued: identical samples), or one
 // level per sample index for all pixels (uniform: same per-pixel variance, correlated pixels).
@@ -55,19 +60,7 @@ void levelSchedule(benchmark::State& state, const std::string& sceneFile, const 
         {"integrator.debias", R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.3},"level_schedule":")" +
                                   schedule + R"("})"}};
     Scene scene = loadScene(std::string(TELESCOPE_SOURCE_DIR) + "/scenes/" + sceneFile, overrides);
-    Renderer renderer(context(), scene, 1);
-    RenderRequest warmup;
-    warmup.spp = 4;
-    renderer.render(warmup);
-    const uint64_t spp = 16;
-    for (auto _ : state) {
-        RenderRequest request;
-        request.spp = spp;
-        renderer.render(request);
-    }
-    const double paths = double(state.iterations()) * spp * 256.0 * 256.0;
-    state.counters["paths_per_s"] = benchmark::Counter(paths, benchmark::Counter::kIsRate);
-    state.SetLabel(context().info().name);
+    pathsPerSecond(state, scene);
 }
 
 }  // namespace
