@@ -128,12 +128,22 @@ void main() {
     uint s = 0u;
     Rng rng;
     PathState path = startSample(pixel, pixelIndex, s, pmf, rng);
+    float rays = 0.0;  // pmf pilot: rays traced by this sample, the pilot's cost model
     while (true) {
+        if (kPilot) rays += 1.0;
         if (pathStep(path, pmf, rng)) continue;
         // ---- Path finished: accumulate, then start the next sample in the same lane ----
-        vec3 z = path.result.base + path.result.correction;
-        if (any(isnan(z)) || any(isinf(z))) {
+        vec3 z = kPilot ? path.result.correction : path.result.base + path.result.correction;
+        if (any(isnan(z)) || any(isinf(z)) || any(isnan(path.result.base)) || any(isinf(path.result.base))) {
             dropped += 1.0;
+        } else if (kPilot) {
+            // pmf pilot, channels: estimate D_j, estimate^2, base = (rays traced, 0, 0),
+            // correction+ = I(k), correction- = I(k)^2 (accumulate.glsl has no other use for them here).
+            sumZ += z;
+            sumZ2 += z * z;
+            sumBase += vec3(rays, 0.0, 0.0);
+            sumCorrectionPos += path.result.base;
+            sumCorrectionNeg += path.result.base * path.result.base;
         } else {
             sumZ += z;
             sumZ2 += z * z;
@@ -142,6 +152,7 @@ void main() {
             sumCorrectionPos += max(path.result.correction, vec3(0.0));
             sumCorrectionNeg += min(path.result.correction, vec3(0.0));
         }
+        rays = 0.0;
         if (++s == pc.sampleCount) break;
         path = startSample(pixel, pixelIndex, s, pmf, rng);
     }

@@ -15,8 +15,9 @@ struct PathResult {
 void addContribution(inout PathResult r, uint bounce, vec3 c, LevelPmf pmf, uint level) {
     if (bounce < kMinBounces) return;
     if (kPilot) {
-        // pmf pilot: only the unweighted correction D_j = c_{j+1} of the fixed level.
-        if (bounce == kMaxBounces + 1u + level) r.correction += c;
+        // pmf pilot: the base I(k) and the unweighted correction D_j = c_{j+1} of the fixed level.
+        if (bounce <= kMaxBounces) r.base += c;
+        else if (bounce == kMaxBounces + 1u + level) r.correction += c;
         return;
     }
     if (bounce <= kMaxBounces) {

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <algorithm>
 #include <map>
 #include <sstream>
 #include <string>
@@ -234,7 +235,7 @@ TEST_F(Cli, ConvergeShowsTheBiasOfTruncationAndNotOfTheDebiasedEstimator) {
     ASSERT_EQ(r.exitCode, 0) << r.stderrText;
     for (const char* f : {"convergence.csv", "convergence.png", "convergence.gp", "strip.png", "report.md"})
         EXPECT_TRUE(fs::exists(dir_ / "conv" / f)) << f;
-    // Rows: method, slice, spp, wall, gpu, rmse, rel_mse, mean_error, rel_mean_error.
+    // Rows: method, seed, slice, spp, wall, gpu, rmse, rel_mse, mean_error, rel_mean_error.
     std::istringstream csv(readText(out("conv/convergence.csv")));
     std::string line;
     std::getline(csv, line);
@@ -245,9 +246,10 @@ TEST_F(Cli, ConvergeShowsTheBiasOfTruncationAndNotOfTheDebiasedEstimator) {
         std::vector<std::string> cells;
         std::stringstream ls(line);
         for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
-        ASSERT_EQ(cells.size(), 9u) << line;
-        finalBias[cells[0]] = std::stod(cells[8]);
-        EXPECT_GT(std::stod(cells[6]), 0.0) << line;
+        ASSERT_EQ(cells.size(), 10u) << line;
+        EXPECT_EQ(cells[1], "1") << line;
+        finalBias[cells[0]] = std::stod(cells[9]);
+        EXPECT_GT(std::stod(cells[7]), 0.0) << line;
     }
     EXPECT_EQ(rows, 6);
     // Truncating at one bounce loses about a quarter of the light; the debiased estimator and the
@@ -256,6 +258,46 @@ TEST_F(Cli, ConvergeShowsTheBiasOfTruncationAndNotOfTheDebiasedEstimator) {
     EXPECT_LT(std::abs(finalBias["\"sum:1\""]), 0.05);
     EXPECT_LT(std::abs(finalBias["\"deep\""]), 0.05);
     EXPECT_NE(readText(out("conv/report.md")).find("| biased:1 |"), std::string::npos);
+}
+
+TEST_F(Cli, ConvergeAveragesIndependentSeeds) {
+    ASSERT_EQ(run("reference " + scene() + " --set camera.resolution=[16,12] -q --spp 64 -o " + out("ref.exr")).exitCode, 0);
+    CommandResult r = run("converge " + scene() + " --set camera.resolution=[16,12] -q --reference " + out("ref.exr") +
+                          " --methods single_term:1,single_term_auto:1 --spp 2,4 --seeds 2 -o " + out("conv"));
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    std::istringstream csv(readText(out("conv/convergence.csv")));
+    std::string line;
+    std::getline(csv, line);
+    // (method, slice) -> relative MSE per seed, and the mean row.
+    std::map<std::pair<std::string, std::string>, std::vector<double>> perSeed;
+    std::map<std::pair<std::string, std::string>, double> mean;
+    while (std::getline(csv, line)) {
+        std::vector<std::string> cells;
+        std::stringstream ls(line);
+        for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
+        ASSERT_EQ(cells.size(), 10u) << line;
+        if (cells[1] == "mean") mean[{cells[0], cells[2]}] = std::stod(cells[7]);
+        else perSeed[{cells[0], cells[2]}].push_back(std::stod(cells[7]));
+    }
+    ASSERT_EQ(mean.size(), 4u);
+    for (const auto& [key, values] : perSeed) {
+        ASSERT_EQ(values.size(), 2u) << key.first;
+        EXPECT_NE(values[0], values[1]) << "independent seeds give different errors";
+        EXPECT_NEAR(mean[key], (values[0] + values[1]) / 2.0, 1e-6 * mean[key]) << key.first;
+    }
+    std::string report = readText(out("conv/report.md"));
+    EXPECT_NE(report.find("Seeds 1 to 2"), std::string::npos) << report;
+    EXPECT_NE(report.find("single_term_auto:1 vs single_term:1"), std::string::npos) << report;
+    EXPECT_NE(report.find("ratio of the medians over seeds"), std::string::npos) << report;
+    EXPECT_NE(report.find("pilot per seed"), std::string::npos) << report;
+}
+
+TEST_F(Cli, ConvergeRejectsZeroSeeds) {
+    ASSERT_EQ(run("render " + scene() + kSmall + " --spp 1 --no-png -o " + out("ref.exr")).exitCode, 0);
+    expectBadInput("converge " + scene() + kSmall + " --reference " + out("ref.exr") +
+                       " --methods biased:1 --spp 1 --seeds 0 -o " + out("conv"),
+                   {"--seeds"});
+    EXPECT_FALSE(fs::exists(dir_ / "conv" / "convergence.csv"));
 }
 
 TEST_F(Cli, ConvergeRejectsAReferenceOfAnotherSize) {

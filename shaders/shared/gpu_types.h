@@ -120,6 +120,7 @@ CONST uint kSpecTwoSided = 11u;
 CONST uint kSpecFilter = 12u;
 CONST uint kSpecEnvironmentLight = 13u;  // light index, or 0xffffffff for none
 CONST uint kSpecMaxTraceDepth = 14u;
+CONST uint kTraceDepthCap = 4096u;       // rays per path at most (a debiased level beyond adds nothing)
 CONST uint kSpecRayEpsilon = 15u;        // absolute ray offset, from the scene size
 CONST uint kSpecPilot = 16u;             // pmf pilot: every sample takes the level pc.pilotLevel
 CONST uint kSpecLevelSchedule = 17u;     // kLevelSchedule*: how per-sample levels are laid out on lanes

@@ -338,6 +338,7 @@ int runConverge(const CommonOptions& common, const ConvergeOptionsCli& c) {
     o.slices = c.slices;
     o.sppList = c.sppList;
     o.seed = c.seed;
+    o.seedCount = c.seeds;
     o.outDir = c.outDir;
     if (!common.quiet) o.log = [](const std::string& line) { fmt::print(stderr, "converge: {}\n", line); };
 

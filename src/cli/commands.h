@@ -57,6 +57,7 @@ struct ConvergeOptionsCli {
     uint32_t slices = 8;
     std::vector<uint64_t> sppList;
     uint32_t seed = 1;
+    uint32_t seeds = 1;
     std::string outDir;
 };
 

@@ -97,6 +97,8 @@ int main(int argc, char** argv) {
         ->delimiter(',')
         ->excludes(convTime);
     converge->add_option("--seed", convergeOptions.seed, "Random seed");
+    converge->add_option("--seeds", convergeOptions.seeds,
+                         "Independent runs per method (seeds SEED, SEED+1, ...); the table and plot show their mean");
     converge->add_option("-o,--output", convergeOptions.outDir, "Output directory")->required();
 
     // ---- study transmittance ----

@@ -94,7 +94,6 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     feature("media", f.media, "media or forward boundaries present", "no participating media");
     feature("grid media", f.grids, "voxel grid media present", "no grid media");
 
-    const uint32_t maxTraceDepth = 4096;
     plan.featuresOf = "path_trace";
     plan.pathTraceSpec = {
         {kSpecMaxBounces, in.maxBounces},
@@ -111,7 +110,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecTwoSided, in.enableTwoSidedShading},
         {kSpecFilter, filterConstant(scene.camera)},
         {kSpecEnvironmentLight, f.environmentLight},
-        {kSpecMaxTraceDepth, std::max(maxTraceDepth, in.maxBounces + 1)},
+        {kSpecMaxTraceDepth, std::max(shader::kTraceDepthCap, in.maxBounces + 1)},
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
         {kSpecPilot, in.pilotLevel != kNoPilotLevel},
         {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},
@@ -165,6 +164,11 @@ public:
         push_.sampleBase = uint32_t(sampleBase);
         push_.sampleCount = samples;
         record(batch, push_, false);
+    }
+
+    void setPilotLevel(uint32_t level) override {
+        if (push_.pilotLevel == kNoPilotLevel) throw std::logic_error("setPilotLevel on a render that is not a pilot");
+        push_.pilotLevel = level;
     }
 
     void recordWarmUp(gpu::CommandBatch& batch) override {

@@ -61,6 +61,19 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
 
 Renderer::~Renderer() = default;
 
+void SamplePasses::setPilotLevel(uint32_t) {
+    throw std::logic_error("this integrator has no pmf pilot");
+}
+
+void Renderer::restartAtPilotLevel(uint32_t level) {
+    passes_->setPilotLevel(level);
+    accum_.fill(0);
+    sampleIndex_ = 0;
+    const double setup = stats_.setupSeconds;
+    stats_ = RenderStats{};
+    stats_.setupSeconds = setup;
+}
+
 void Renderer::render(const RenderRequest& request) {
     const Camera& cam = scene_.camera;
     const uint32_t perUnit = passes_->samplesPerUnit();

@@ -70,6 +70,10 @@ public:
     // first render() call.
     void resume(const Film& film);
     Film film() const;  // downloads the accumulation
+    // The pmf pilot only (a scene with integrator.pilotLevel set): starts again from an empty
+    // film at another fixed level, with the same pipelines and the same random numbers (sample
+    // indices restart at 0). Stats restart too, except the setup time.
+    void restartAtPilotLevel(uint32_t level);
     const RenderStats& stats() const { return stats_; }
     uint32_t seed() const { return seed_; }
 

@@ -49,6 +49,9 @@ public:
     virtual uint64_t deviceBytes() const { return 0; }
     // Empty dispatches of every pipeline: lavapipe compiles a pipeline at its first dispatch.
     virtual void recordWarmUp(gpu::CommandBatch& batch) = 0;
+    // The pmf pilot's fixed level (a push constant of a pilot plan); integrators without a pilot
+    // throw std::logic_error.
+    virtual void setPilotLevel(uint32_t level);
 };
 
 std::unique_ptr<SamplePasses> makePathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan,

@@ -77,12 +77,19 @@ void appendPanel(std::vector<std::vector<float>>& rows, const Crop& c, int width
     }
 }
 
+// A point of the plotted curve: a single run's slice, or the mean over seeds.
+bool onCurve(const ConvergeReport& report, const ConvergePoint& p) {
+    for (const auto& q : report.points)
+        if (q.seed == kAllSeeds) return p.seed == kAllSeeds;
+    return true;
+}
+
 std::string gnuplotScript(const ConvergeReport& report, const std::string& pngName) {
     std::string s;
     for (size_t m = 0; m < report.methods.size(); ++m) {
         s += fmt::format("$m{} << EOD\n", m);
         for (const auto& p : report.points)
-            if (p.method == report.methods[m].method.label && p.gpuSeconds > 0.0)
+            if (p.method == report.methods[m].method.label && p.gpuSeconds > 0.0 && onCurve(report, p))
                 s += fmt::format("{:.9g} {:.9g} {:.9g}\n", p.gpuSeconds, p.error.relMse,
                                  std::abs(p.error.relMeanError));
         s += "EOD\n";
@@ -117,6 +124,8 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
         throw InputError("", "--time", "give exactly one of --time and --spp");
     if (o.timeBudget > 0.0 && (o.slices < 1 || o.slices > 30))
         throw InputError("", "--slices", fmt::format("{} slices: expected 1 to 30", o.slices));
+    if (o.seedCount < 1 || o.seedCount > 64)
+        throw InputError("", "--seeds", fmt::format("{} seeds: expected 1 to 64", o.seedCount));
     for (size_t i = 0; i < o.sppList.size(); ++i)
         if (o.sppList[i] == 0 || (i > 0 && o.sppList[i] <= o.sppList[i - 1]))
             throw InputError("", "--spp", "sample counts must be positive and increasing");
@@ -164,67 +173,118 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
 
     for (size_t mi = 0; mi < o.methods.size(); ++mi) {
         const Method& method = o.methods[mi];
-        // A pilot's time is part of the method's cost: its curve starts after it.
-        PmfPilotResult pilot;
-        if (resolveAutoPmf(context, scenes[mi], o.seed, &pilot)) log(pilot.summary());
-        Renderer renderer(context, scenes[mi], o.seed);
         MethodSummary summary;
         summary.method = method;
-        summary.estimator = renderer.plan().estimator;
-        summary.pilotGpuSeconds = pilot.pilotGpuSeconds;
-        summary.pilotWallSeconds = pilot.pilotWallSeconds;
-        if (pilot.pilotGpuSeconds > 0.0)
-            summary.estimator += fmt::format(" (chosen by a {:.2f} s pilot)", pilot.pilotGpuSeconds);
-        log(fmt::format("{}: {}", method.label, summary.estimator));
-        Film film;
-        for (size_t s = 0; s < sliceCount; ++s) {
-            RenderRequest request;
-            if (o.timeBudget > 0.0) {
-                request.timeLimit = timeTargets[s] - renderer.stats().wallSeconds - summary.pilotWallSeconds;
-                const bool lastSlice = s + 1 == sliceCount;
-                if (request.timeLimit <= 0.0 && !(lastSlice && renderer.stats().samplesPerPixel == 0))
-                    continue;  // the last batch (or the pilot) already reached this slice
-                // A pilot that used the whole budget still gets one batch, so its method shows
-                // up, late, in the plot and the table.
-                if (request.timeLimit <= 0.0) request.spp = 1, request.timeLimit = 0.0;
-            } else {
-                request.spp = o.sppList[s] - renderer.stats().samplesPerPixel;
+        std::vector<std::vector<ConvergePoint>> runs;
+        Film firstFilm;
+        for (uint32_t si = 0; si < o.seedCount; ++si) {
+            const uint32_t seed = o.seed + si;
+            Scene scene = scenes[mi];
+            // A pilot's time is part of the method's cost: its curve starts after it.
+            PmfPilotResult pilot;
+            if (resolveAutoPmf(context, scene, seed, &pilot)) {
+                log(pilot.summary());
+                const PmfSettings& c = pilot.chosen.pmf;
+                summary.pilotChoices += fmt::format("{}{}", summary.pilotChoices.empty() ? "" : ", ",
+                                                    c.type == PmfType::Geometric ? fmt::format("r = {:.2f}", c.r)
+                                                                                 : fmt::format("alpha = {:.2f}", c.alpha));
             }
-            renderer.render(request);
-            film = renderer.film();
-            ConvergePoint p;
-            p.method = method.label;
-            p.slice = uint32_t(s);
-            p.spp = film.samplesPerPixel();
-            p.wallSeconds = renderer.stats().wallSeconds + summary.pilotWallSeconds;
-            p.gpuSeconds = gpuSeconds(renderer.stats()) + summary.pilotGpuSeconds;
-            p.error = compareToReference(film, reference);
-            report.points.push_back(p);
-            log(fmt::format("  slice {}: {} spp, {:.3f} s GPU, relMSE {:.4g}, bias {:+.4g}", s, p.spp, p.gpuSeconds,
-                            p.error.relMse, p.error.relMeanError));
+            Renderer renderer(context, scene, seed);
+            if (si == 0) summary.estimator = renderer.plan().estimator;
+            summary.pilotGpuSeconds += pilot.pilotGpuSeconds / o.seedCount;
+            summary.pilotWallSeconds += pilot.pilotWallSeconds / o.seedCount;
+            if (si == 0) log(fmt::format("{}: {}", method.label, summary.estimator));
+            std::vector<ConvergePoint> run;
+            Film film;
+            for (size_t s = 0; s < sliceCount; ++s) {
+                RenderRequest request;
+                if (o.timeBudget > 0.0) {
+                    request.timeLimit = timeTargets[s] - renderer.stats().wallSeconds - pilot.pilotWallSeconds;
+                    const bool lastSlice = s + 1 == sliceCount;
+                    if (request.timeLimit <= 0.0 && !(lastSlice && renderer.stats().samplesPerPixel == 0))
+                        continue;  // the last batch (or the pilot) already reached this slice
+                    // A pilot that used the whole budget still gets one batch, so its method shows
+                    // up, late, in the plot and the table.
+                    if (request.timeLimit <= 0.0) request.spp = 1, request.timeLimit = 0.0;
+                } else {
+                    request.spp = o.sppList[s] - renderer.stats().samplesPerPixel;
+                }
+                renderer.render(request);
+                film = renderer.film();
+                ConvergePoint p;
+                p.method = method.label;
+                p.seed = seed;
+                p.slice = uint32_t(s);
+                p.spp = film.samplesPerPixel();
+                p.wallSeconds = renderer.stats().wallSeconds + pilot.pilotWallSeconds;
+                p.gpuSeconds = gpuSeconds(renderer.stats()) + pilot.pilotGpuSeconds;
+                p.error = compareToReference(film, reference);
+                run.push_back(p);
+                report.points.push_back(p);
+                log(fmt::format("  seed {} slice {}: {} spp, {:.3f} s GPU, relMSE {:.4g}, bias {:+.4g}", seed, s, p.spp,
+                                p.gpuSeconds, p.error.relMse, p.error.relMeanError));
+            }
+            if (run.empty()) throw std::runtime_error(fmt::format("method '{}' rendered no slice", method.label));
+            summary.seedWorkTimesMse.push_back(run.back().gpuSeconds * run.back().error.relMse);
+            summary.nonFiniteSamples += film.nonFiniteSamples();
+            if (si == 0) firstFilm = film;
+            runs.push_back(std::move(run));
+        }
+        if (!summary.pilotChoices.empty())
+            summary.estimator += fmt::format(" (pmf chosen by a {:.2f} s pilot{}: {})", summary.pilotGpuSeconds,
+                                             o.seedCount > 1 ? " per seed" : "", summary.pilotChoices);
+
+        // ---- The curve: the run itself, or the means over the seeds of the slices all reached ----
+        std::vector<ConvergePoint> curve = runs.front();
+        if (o.seedCount > 1) {
+            curve.clear();
+            for (size_t s = 0; s < sliceCount; ++s) {
+                ConvergePoint mean;
+                mean.method = method.label;
+                mean.slice = uint32_t(s);
+                size_t found = 0;
+                for (const auto& run : runs)
+                    for (const auto& p : run) {
+                        if (p.slice != s) continue;
+                        ++found;
+                        const double w = 1.0 / double(runs.size());
+                        mean.spp += p.spp;
+                        mean.wallSeconds += w * p.wallSeconds;
+                        mean.gpuSeconds += w * p.gpuSeconds;
+                        mean.error.rmse += w * p.error.rmse * p.error.rmse;  // mean square, root below
+                        mean.error.relMse += w * p.error.relMse;
+                        mean.error.meanError += w * p.error.meanError;
+                        mean.error.relMeanError += w * p.error.relMeanError;
+                    }
+                if (found != runs.size()) continue;
+                mean.spp /= runs.size();
+                mean.error.rmse = std::sqrt(mean.error.rmse);
+                curve.push_back(mean);
+                report.points.push_back(mean);
+            }
+            if (curve.empty()) curve.push_back(runs.front().back());
         }
         std::vector<double> t, e;
-        for (const auto& p : report.points)
-            if (p.method == method.label) t.push_back(p.gpuSeconds), e.push_back(p.error.relMse);
-        if (t.empty()) throw std::runtime_error(fmt::format("method '{}' rendered no slice", method.label));
-        summary.last = report.points.back();
+        for (const auto& p : curve) t.push_back(p.gpuSeconds), e.push_back(p.error.relMse);
+        summary.last = curve.back();
         summary.slope = logLogSlope(t, e);
         size_t half = t.size() / 2;
         summary.slopeLateHalf = logLogSlope(std::vector<double>(t.begin() + half, t.end()),
                                             std::vector<double>(e.begin() + half, e.end()));
         summary.secondsTo1e2 = timeToReach(t, e, 1e-2);
         summary.secondsTo1e3 = timeToReach(t, e, 1e-3);
-        summary.nonFiniteSamples = film.nonFiniteSamples();
         report.methods.push_back(summary);
         appendPanel(strip, crop, width,
-                    [&](size_t p, int c) { return float(film.mean(shader::kChannelEstimate, p)[c]); });
+                    [&](size_t p, int c) { return float(firstFilm.mean(shader::kChannelEstimate, p)[c]); });
     }
 
     // ---- Files ----
     auto out = [&](const char* name) { return (fs::path(o.outDir) / name).string(); };
-    std::string csv = "method,slice,spp,wall_seconds,gpu_seconds,rmse,rel_mse,mean_error,rel_mean_error\n";
+    // seed: the run's seed, or "mean" for the means over the seeds.
+    std::string csv = "method,seed,slice,spp,wall_seconds,gpu_seconds,rmse,rel_mse,mean_error,rel_mean_error\n";
     for (const auto& p : report.points)
-        csv += fmt::format("{},{},{},{:.6f},{:.6f},{:.9g},{:.9g},{:.9g},{:.9g}\n", csvQuote(p.method), p.slice, p.spp,
+        csv += fmt::format("{},{},{},{},{:.6f},{:.6f},{:.9g},{:.9g},{:.9g},{:.9g}\n", csvQuote(p.method),
+                           p.seed == kAllSeeds ? std::string("mean") : std::to_string(p.seed), p.slice, p.spp,
                            p.wallSeconds, p.gpuSeconds, p.error.rmse, p.error.relMse, p.error.meanError,
                            p.error.relMeanError);
     writeTextAtomically(out("convergence.csv"), csv);
@@ -247,8 +307,11 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
         log("gnuplot failed or is not installed: convergence.png not written (convergence.gp is)");
     }
 
-    std::string md = fmt::format("# Convergence: {}\n\nReference: `{}` ({}x{}). Seed {}. ", o.scenePath,
-                                 o.referencePath, width, height, o.seed);
+    std::string md = fmt::format("# Convergence: {}\n\nReference: `{}` ({}x{}). ", o.scenePath, o.referencePath, width,
+                                 height);
+    md += o.seedCount > 1 ? fmt::format("Seeds {} to {}: each row is the mean over {} independent runs. ", o.seed,
+                                        o.seed + o.seedCount - 1, o.seedCount)
+                          : fmt::format("Seed {}. ", o.seed);
     md += o.timeBudget > 0.0 ? fmt::format("Equal render time: {:g} s per method in {} doubling slices.\n\n",
                                            o.timeBudget, o.slices)
                              : "Equal sample counts per slice.\n\n";
@@ -273,13 +336,23 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
                 d.method.label.compare(d.method.label.size() - level.size(), level.size(), level) != 0)
                 continue;
             const double ratio = workTimesMse(a) / workTimesMse(d);
-            autoLines += fmt::format("- {} vs {}: work x relMSE ratio {:.3f} ({})\n", a.method.label, d.method.label,
-                                     ratio, ratio < 0.9 ? "auto wins" : ratio <= 1.1 ? "within 10%" : "auto loses");
+            std::string perSeed;
+            if (o.seedCount > 1) {
+                auto median = [](std::vector<double> v) {
+                    std::sort(v.begin(), v.end());
+                    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+                };
+                perSeed = fmt::format("; ratio of the medians over seeds {:.3f}",
+                                      median(a.seedWorkTimesMse) / median(d.seedWorkTimesMse));
+            }
+            autoLines += fmt::format("- {} vs {}: work x relMSE ratio {:.3f} ({}){}\n", a.method.label, d.method.label,
+                                     ratio, ratio < 0.9 ? "auto wins" : ratio <= 1.1 ? "within 10%" : "auto loses",
+                                     perSeed);
         }
     }
     if (!autoLines.empty())
         md += "\nAuto pmf against the fixed defaults (GPU time x relative MSE at the end of the budget, pilot "
-              "included; below 1 is better):\n\n" + autoLines;
+              "included, means over the seeds; below 1 is better):\n\n" + autoLines;
     md += "\nMethods:\n\n";
     for (const auto& m : report.methods)
         md += fmt::format("- **{}**: {}. {}\n", m.method.label, m.method.description, m.estimator);

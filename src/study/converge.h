@@ -28,12 +28,19 @@ struct ConvergeOptions {
     uint32_t slices = 8;
     std::vector<uint64_t> sppList;    // or: measure after each of these total sample counts
     uint32_t seed = 1;
+    uint32_t seedCount = 1;           // independent runs per method: seeds seed, seed + 1, ...
     std::string outDir;
     std::function<void(const std::string&)> log;  // progress lines (may be empty)
 };
 
+// One slice of one method: of one seed's run, or (seed = kAllSeeds) the mean over the seeds of
+// the slices every run reached (times, samples and errors averaged; the relative MSE of the mean
+// over seeds is an unbiased estimate of the expected relative MSE).
+constexpr uint32_t kAllSeeds = 0xffffffffu;
+
 struct ConvergePoint {
     std::string method;
+    uint32_t seed = kAllSeeds;
     uint32_t slice = 0;
     uint64_t spp = 0;
     double wallSeconds = 0.0;  // render time, pipeline creation excluded
@@ -51,11 +58,13 @@ struct MethodSummary {
     double secondsTo1e3 = -1.0;
     uint64_t nonFiniteSamples = 0;
     double pilotGpuSeconds = 0.0;   // pmf pilot (pmf "auto"), included in the times above
-    double pilotWallSeconds = 0.0;
+    double pilotWallSeconds = 0.0;  // (means over the seeds)
+    std::string pilotChoices;       // pmf "auto": the pmf each seed's pilot chose
+    std::vector<double> seedWorkTimesMse;  // GPU seconds x relative MSE at the end, per seed
 };
 
 struct ConvergeReport {
-    std::vector<ConvergePoint> points;
+    std::vector<ConvergePoint> points;  // every seed's slices, then (seed kAllSeeds) their means
     std::vector<MethodSummary> methods;
     std::vector<std::string> files;  // written, in order
 };

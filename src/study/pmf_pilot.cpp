@@ -8,13 +8,16 @@
 #include <fmt/format.h>
 
 #include "render/renderer.h"
+#include "shared/gpu_types.h"
 
 namespace telescope {
 
 namespace {
 
 constexpr double kWeightEpsilon = 1e-2;  // as in the relative MSE
-constexpr uint32_t kMaxPredictedLevels = 20000;
+constexpr double kLogMisfit = 0.05;      // floor on the standard deviation of a level's log E[D^2]
+constexpr double kUpperSigmas = 2.0;     // the tail's decay: fit plus this many standard errors
+constexpr double kMaxDecay = 0.999;
 
 double gpuSeconds(const RenderStats& stats) {
     double ms = 0.0;
@@ -35,142 +38,160 @@ double logProbability(const PmfSettings& pmf, uint32_t m) {
     return (a - 1.0) * std::log(n) + std::log(-std::expm1((1.0 - a) * std::log1p(-1.0 / (n + 1.0))));
 }
 
-// Least-squares line y = a + b x.
-std::pair<double, double> fitLine(const std::vector<double>& x, const std::vector<double>& y) {
-    const double n = double(x.size());
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (size_t i = 0; i < x.size(); ++i) sx += x[i], sy += y[i], sxx += x[i] * x[i], sxy += x[i] * y[i];
-    const double den = n * sxx - sx * sx;
-    if (x.size() < 2 || !(std::abs(den) > 0.0)) return {x.empty() ? 0.0 : sy / n, 0.0};
-    const double b = (n * sxy - sx * sy) / den;
-    return {(sy - b * sx) / n, b};
-}
-
-struct Model {
-    std::vector<double> logM2, logCost;  // measured levels
-    double logDecay = 0.0, logGrowth = 0.0;
-    double logM2At(uint32_t m) const {
-        if (m < logM2.size()) return logM2[m];
-        return logM2.back() + double(m - logM2.size() + 1) * logDecay;
-    }
-    double logCostAt(uint32_t m) const {
-        if (m < logCost.size()) return logCost[m];
-        return logCost.back() + double(m - logCost.size() + 1) * logGrowth;
-    }
+struct Line {
+    double intercept = 0.0, slope = 0.0, slopeError = 0.0;
+    bool valid = false;
 };
 
-Model makeModel(const PmfPilotResult& pilot) {
-    Model model;
-    // A level whose correction was never seen keeps a small floor below the smallest seen.
-    double floorM2 = std::numeric_limits<double>::infinity();
-    for (const auto& l : pilot.levels)
-        if (l.secondMoment > 0.0) floorM2 = std::min(floorM2, l.secondMoment);
-    if (!std::isfinite(floorM2)) floorM2 = 1e-30;
-    for (const auto& l : pilot.levels) {
-        model.logM2.push_back(std::log(std::max(l.secondMoment, 1e-3 * floorM2)));
-        model.logCost.push_back(std::log(std::max(l.secondsPerPath, 1e-15)));
+// Weighted least-squares line y = a + b x (weights 1 / sigma^2). The slope's standard error is
+// the larger of the one the sigmas predict and the one the scatter about the line shows.
+Line fitLine(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& sigma) {
+    Line line;
+    double sw = 0, sx = 0, sy = 0;
+    for (size_t i = 0; i < x.size(); ++i) {
+        const double w = 1.0 / (sigma[i] * sigma[i]);
+        sw += w, sx += w * x[i], sy += w * y[i];
     }
-    model.logDecay = std::log(pilot.tailDecay);
-    model.logGrowth = std::log1p(std::max(pilot.tailCostSlope, 0.0));
-    return model;
+    if (x.size() < 2 || !(sw > 0.0)) return line;
+    const double mx = sx / sw, my = sy / sw;
+    double sxx = 0, sxy = 0;
+    for (size_t i = 0; i < x.size(); ++i) {
+        const double w = 1.0 / (sigma[i] * sigma[i]);
+        sxx += w * (x[i] - mx) * (x[i] - mx), sxy += w * (x[i] - mx) * (y[i] - my);
+    }
+    if (!(sxx > 0.0)) return line;
+    line.slope = sxy / sxx;
+    line.intercept = my - line.slope * mx;
+    double chi2 = 0.0;
+    for (size_t i = 0; i < x.size(); ++i) {
+        const double r = (y[i] - line.intercept - line.slope * x[i]) / sigma[i];
+        chi2 += r * r;
+    }
+    const double scatter = x.size() > 2 ? chi2 / double(x.size() - 2) : 1.0;
+    line.slopeError = std::sqrt(std::max(1.0, scatter) / sxx);
+    line.valid = std::isfinite(line.slope) && std::isfinite(line.slopeError);
+    return line;
 }
 
 }  // namespace
 
+double PilotModel::logSecondMomentAt(uint32_t m) const {
+    if (secondMoment.empty() || m >= levelCap) return -std::numeric_limits<double>::infinity();
+    if (m < secondMoment.size()) return std::log(secondMoment[m]);
+    return std::log(secondMoment.back()) + double(m - secondMoment.size() + 1) * std::log(decayUpper);
+}
+
+double PilotModel::secondMomentAt(uint32_t m) const { return std::exp(logSecondMomentAt(m)); }
+
+double PilotModel::costAt(uint32_t m) const {
+    if (rays.empty()) return costIntercept;
+    m = std::min(m, levelCap);
+    double r = rays.back();
+    if (m < rays.size()) {
+        r = rays[m];
+    } else if (raySurvival > 0.0) {
+        // Increments shrink by raySurvival per level: rays.back() + d (s + s^2 + ... + s^n).
+        const double d = rays.size() > 1 ? rays.back() - rays[rays.size() - 2] : 0.0;
+        const double n = double(m - rays.size() + 1), s = raySurvival;
+        r += d * (s >= 1.0 ? n : s * -std::expm1(n * std::log(s)) / (1.0 - s));
+    }
+    return costIntercept + costPerRay * std::min(r, double(shader::kTraceDepthCap));
+}
+
+void fitPilotModel(PmfPilotResult& pilot) {
+    PilotModel& model = pilot.model;
+    model = PilotModel{};
+    model.levelCap = pilot.levelCap;
+    const size_t n = pilot.levels.size();
+    if (n == 0) return;
+
+    // ---- E[D^2]: a weighted line in log space; the tail decays at its upper bound ----
+    std::vector<double> x, y, sigma;
+    for (const auto& l : pilot.levels) {
+        if (!(l.secondMoment > 0.0)) continue;
+        x.push_back(double(l.level));
+        y.push_back(std::log(l.secondMoment));
+        sigma.push_back(std::sqrt(std::log1p(l.relativeError * l.relativeError) + kLogMisfit * kLogMisfit));
+    }
+    const Line line = fitLine(x, y, sigma);
+    if (line.valid) {
+        model.decay = std::clamp(std::exp(line.slope), 1e-6, kMaxDecay);
+        model.decayUpper = std::clamp(std::exp(line.slope + kUpperSigmas * line.slopeError), model.decay, kMaxDecay);
+    } else {
+        // One level or none with a correction seen: nothing to fit, so a slow decay.
+        model.decay = 0.5;
+        model.decayUpper = 0.9;
+    }
+    for (const auto& l : pilot.levels) {
+        const double fitted = line.valid ? std::exp(line.intercept + line.slope * double(l.level)) : 0.0;
+        model.secondMoment.push_back(std::max(l.secondMoment, fitted));
+    }
+    if (!line.valid && !x.empty()) {
+        // A single level with a correction: the levels after it decay from it.
+        for (size_t i = 1; i < n; ++i)
+            model.secondMoment[i] = std::max(model.secondMoment[i], model.secondMoment[i - 1] * model.decayUpper);
+    }
+
+    // ---- Cost: seconds per path = a + b rays, rays extrapolated by their survival ----
+    double rmax = 0.0;
+    for (const auto& l : pilot.levels) model.rays.push_back(rmax = std::max(rmax, l.raysPerPath));
+    std::vector<double> cx, cy, ones;
+    for (const auto& l : pilot.levels) cx.push_back(l.raysPerPath), cy.push_back(l.secondsPerPath), ones.push_back(1.0);
+    const Line cost = fitLine(cx, cy, ones);
+    double meanCost = 0.0;
+    for (double c : cy) meanCost += c / double(cy.size());
+    if (cost.valid && cost.slope > 0.0 && cost.intercept >= 0.0) {
+        model.costIntercept = cost.intercept;
+        model.costPerRay = cost.slope;
+    } else if (cost.valid && cost.slope > 0.0) {
+        model.costIntercept = 0.0;  // through the origin: cost proportional to rays
+        double sxy = 0.0, sxx = 0.0;
+        for (size_t i = 0; i < cx.size(); ++i) sxy += cx[i] * cy[i], sxx += cx[i] * cx[i];
+        model.costPerRay = sxy / sxx;
+    } else {
+        model.costIntercept = std::max(meanCost, 1e-15);  // no measurable growth with rays
+    }
+    // Survival: the ratio of successive ray increments over the second half of the levels.
+    std::vector<double> sx, sy, sone;
+    for (size_t i = std::max<size_t>(1, n / 2); i < n; ++i) {
+        const double d = model.rays[i] - model.rays[i - 1];
+        if (d > 1e-9 * model.rays[i]) sx.push_back(double(i)), sy.push_back(std::log(d)), sone.push_back(1.0);
+    }
+    const Line survival = fitLine(sx, sy, sone);
+    model.raySurvival = survival.valid ? std::clamp(std::exp(survival.slope), 0.0, 1.0) : (sx.empty() ? 0.0 : 1.0);
+}
+
 PmfCandidate predictPmf(const PmfPilotResult& pilot, const PmfSettings& pmf, DebiasEstimator estimator) {
     PmfCandidate c;
     c.pmf = pmf;
-    if (pilot.levels.empty()) return c;
-    const Model model = makeModel(pilot);
+    const PilotModel& model = pilot.model;
+    if (model.secondMoment.empty()) return c;
     double variance = 0.0, cost = 0.0;
-    for (uint32_t m = 0; m < kMaxPredictedLevels; ++m) {
+    const uint32_t measured = uint32_t(model.secondMoment.size());
+    for (uint32_t m = 0; m < model.levelCap; ++m) {
         // Single term: D_m / p(m) with probability p(m). Sum: D_m / P(M >= m) whenever M >= m
         // (the covariances between levels are left out of the prediction).
         const double lp = logProbability(pmf, m);
         const double lv = estimator == DebiasEstimator::Sum ? logTail(pmf, m) : lp;
-        const double dv = std::exp(model.logM2At(m) - lv), dc = std::exp(lp + model.logCostAt(m));
+        // In log space: a term that grows overflows to infinity rather than its E[D^2] underflowing.
+        const double dv = std::exp(model.logSecondMomentAt(m) - lv), dc = std::exp(lp) * model.costAt(m);
         variance += dv;
         cost += dc;
-        if (m > pilot.levels.size() + 32 && dv <= 1e-9 * variance && dc <= 1e-9 * cost) break;
-        if (m + 1 == kMaxPredictedLevels) variance = cost = std::numeric_limits<double>::infinity();
+        if (m > measured + 32 && dv <= 1e-9 * variance && std::exp(logTail(pmf, m + 1)) * model.costAt(model.levelCap) <= 1e-9 * cost)
+            break;
+        if (m + 1 == model.levelCap) cost += std::exp(logTail(pmf, m + 1)) * model.costAt(model.levelCap);
     }
     c.variance = pilot.baseVariance + variance;
     c.cost = cost;
     return c;
 }
 
-PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t seed) {
-    PmfPilotResult result;
-    const PmfSettings settings = sceneIn.integrator.debias.pmf;
-    const uint32_t spp = settings.pilotSpp;
-    const DebiasEstimator estimator = sceneIn.integrator.debias.estimator;
-
-    // ---- The base I(k): per-pixel weights and the base variance ----
-    Scene base = sceneIn;
-    base.integrator.debias.estimator = DebiasEstimator::None;
-    base.integrator.debias.pmf = PmfSettings{};
-    Renderer baseRenderer(context, base, seed ^ 0x9E3779B9u);
-    RenderRequest request;
-    request.spp = std::max<uint32_t>(spp, 2);
-    baseRenderer.render(request);
-    const Film baseFilm = baseRenderer.film();
-    const double pixels = double(baseFilm.pixelCount());
-    std::vector<glm::dvec3> weight(baseFilm.pixelCount());
-    for (size_t i = 0; i < baseFilm.pixelCount(); ++i) {
-        glm::dvec3 b = baseFilm.mean(shader::kChannelEstimate, i);
-        weight[i] = 1.0 / (b * b + kWeightEpsilon);
-        glm::dvec3 v = baseFilm.varianceOfMean(i) * double(baseFilm.samplesPerPixel()) * weight[i];
-        result.baseVariance += (v.x + v.y + v.z) / (3.0 * pixels);
-    }
-    result.pilotGpuSeconds += gpuSeconds(baseRenderer.stats());
-    result.pilotWallSeconds += baseRenderer.stats().wallSeconds;
-
-    // ---- One fixed level at a time: the unweighted correction D_j and its cost ----
-    for (uint32_t m = 0; m < settings.pilotLevels; ++m) {
-        Scene s = sceneIn;
-        s.integrator.debias.estimator = DebiasEstimator::SingleTerm;
-        s.integrator.debias.pmf = PmfSettings{};
-        s.integrator.pilotLevel = m;
-        Renderer r(context, s, seed + 7919u * (m + 1));
-        RenderRequest req;
-        req.spp = spp;
-        r.render(req);
-        const Film film = r.film();
-        PilotLevel level;
-        level.level = m;
-        for (size_t i = 0; i < film.pixelCount(); ++i) {
-            glm::dvec3 m2 = film.mean(shader::kChannelEstimateSq, i) * weight[i];
-            level.secondMoment += (m2.x + m2.y + m2.z) / (3.0 * pixels);
-        }
-        const double seconds = gpuSeconds(r.stats());
-        level.secondsPerPath = seconds / (double(spp) * pixels);
-        result.pilotGpuSeconds += seconds;
-        result.pilotWallSeconds += r.stats().wallSeconds;
-        result.levels.push_back(level);
-    }
-
-    // ---- Tail: geometric decay of the second moment, geometric growth of the cost ----
-    std::vector<double> x, logM2, cost, logCost;
-    const size_t half = result.levels.size() / 2;
-    for (size_t i = half; i < result.levels.size(); ++i) {
-        if (result.levels[i].secondMoment > 0.0) {
-            x.push_back(double(i));
-            logM2.push_back(std::log(result.levels[i].secondMoment));
-        }
-    }
-    double decay = std::exp(fitLine(x, logM2).second);
-    result.tailDecay = std::isfinite(decay) && decay > 0.0 ? std::min(decay, 0.999) : 0.5;
-    std::vector<double> xc;
-    for (size_t i = half; i < result.levels.size(); ++i) {
-        xc.push_back(double(i));
-        logCost.push_back(std::log(std::max(result.levels[i].secondsPerPath, 1e-15)));
-    }
-    result.tailCostSlope = std::max(0.0, std::expm1(fitLine(xc, logCost).second));
-
-    // ---- The ideal shape and the best member of each family ----
+void choosePmf(PmfPilotResult& result, DebiasEstimator estimator) {
+    fitPilotModel(result);
+    result.idealPmf.clear();
     double norm = 0.0;
-    for (const auto& l : result.levels) {
-        result.idealPmf.push_back(std::sqrt(std::max(l.secondMoment, 0.0) / std::max(l.secondsPerPath, 1e-15)));
+    for (size_t m = 0; m < result.levels.size(); ++m) {
+        result.idealPmf.push_back(std::sqrt(result.model.secondMomentAt(uint32_t(m)) / result.model.costAt(uint32_t(m))));
         norm += result.idealPmf.back();
     }
     for (double& p : result.idealPmf) p = norm > 0.0 ? p / norm : 0.0;
@@ -190,6 +211,67 @@ PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t
             if (c.product() < result.chosen.product()) result.chosen = c;
         }
     }
+}
+
+PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t seed) {
+    PmfPilotResult result;
+    const PmfSettings settings = sceneIn.integrator.debias.pmf;
+    const uint32_t spp = settings.pilotSpp;
+    const DebiasEstimator estimator = sceneIn.integrator.debias.estimator;
+    const uint32_t k = sceneIn.integrator.maxBounces;
+    result.levelCap = shader::kTraceDepthCap > k ? shader::kTraceDepthCap - k : 1u;
+
+    // ---- One renderer for every level (the level is a push constant: one pipeline compile) ----
+    // Every level uses the same seed: level m + 1 traces the same paths as level m, one bounce
+    // further, so the ray counts of successive levels differ by exactly the paths that survive.
+    Scene s = sceneIn;
+    s.integrator.debias.estimator = DebiasEstimator::SingleTerm;
+    s.integrator.debias.pmf = PmfSettings{};
+    s.integrator.debias.schedule = LevelSchedule::PerPixel;
+    s.integrator.pilotLevel = 0;
+    Renderer r(context, s, seed + 7919u);
+    std::vector<glm::dvec3> weight;
+    double pixels = 0.0;
+    for (uint32_t m = 0; m < settings.pilotLevels; ++m) {
+        if (m > 0) r.restartAtPilotLevel(m);
+        RenderRequest req;
+        req.spp = m == 0 ? std::max<uint32_t>(spp, 2) : spp;  // the base variance needs two samples
+        r.render(req);
+        const Film film = r.film();
+        const double n = double(film.samplesPerPixel());
+        if (m == 0) {
+            // ---- The base I(k) (the same paths at every level): per-pixel weights and variance ----
+            pixels = double(film.pixelCount());
+            weight.resize(film.pixelCount());
+            for (size_t i = 0; i < film.pixelCount(); ++i) {
+                const glm::dvec3 b = film.mean(shader::kChannelCorrectionPositive, i);
+                const glm::dvec3 b2 = film.mean(shader::kChannelCorrectionNegative, i);
+                weight[i] = 1.0 / (b * b + kWeightEpsilon);
+                const glm::dvec3 v = glm::max(b2 - b * b, glm::dvec3(0.0)) * (n / (n - 1.0)) * weight[i];
+                result.baseVariance += (v.x + v.y + v.z) / (3.0 * pixels);
+            }
+        }
+        PilotLevel level;
+        level.level = m;
+        double sumSq = 0.0;
+        for (size_t i = 0; i < film.pixelCount(); ++i) {
+            glm::dvec3 m2 = film.mean(shader::kChannelEstimateSq, i) * weight[i];
+            const double value = (m2.x + m2.y + m2.z) / 3.0;
+            level.secondMoment += value / pixels;
+            sumSq += value * value;
+            level.raysPerPath += film.mean(shader::kChannelBase, i).x / pixels;
+        }
+        // Pixels are independent: the spread of their values bounds the error of the mean.
+        const double spread = std::sqrt(std::max(0.0, sumSq / pixels - level.secondMoment * level.secondMoment));
+        level.relativeError = level.secondMoment > 0.0 ? spread / std::sqrt(pixels) / level.secondMoment : 0.0;
+        const double seconds = gpuSeconds(r.stats());
+        level.secondsPerPath = seconds / (n * pixels);
+        result.pilotGpuSeconds += seconds;
+        result.pilotWallSeconds += r.stats().wallSeconds;
+        result.levels.push_back(level);
+    }
+
+    choosePmf(result, estimator);
     result.chosen.pmf.pilotSpp = settings.pilotSpp;
     result.chosen.pmf.pilotLevels = settings.pilotLevels;
     return result;
@@ -204,12 +286,15 @@ std::string PmfPilotResult::summary() const {
     std::string s = fmt::format("pmf pilot ({} levels, {:.2f} s GPU): chosen {}\n", levels.size(), pilotGpuSeconds,
                                 describe(chosen));
     s += fmt::format("  default {}\n  default {}\n", describe(geometricDefault), describe(powerLawDefault));
-    s += "  level: E[D^2] (weighted), us per path, ideal p\n";
+    s += "  level: E[D^2] (weighted) +- relative error, modelled E[D^2], us per path, rays per path, ideal p\n";
     for (size_t i = 0; i < levels.size(); ++i)
-        s += fmt::format("    {}: {:.4g}, {:.3f}, {:.3f}\n", levels[i].level, levels[i].secondMoment,
-                         levels[i].secondsPerPath * 1e6, idealPmf[i]);
-    s += fmt::format("  tail: E[D^2] ratio {:.3f} per level, cost growth {:.3f} per level; base variance {:.4g}\n",
-                     tailDecay, tailCostSlope, baseVariance);
+        s += fmt::format("    {}: {:.4g} +- {:.2f}, {:.4g}, {:.3f}, {:.3f}, {:.3f}\n", levels[i].level,
+                         levels[i].secondMoment, levels[i].relativeError, model.secondMomentAt(uint32_t(i)),
+                         levels[i].secondsPerPath * 1e6, levels[i].raysPerPath, idealPmf[i]);
+    s += fmt::format("  tail: E[D^2] ratio {:.3f} per level (upper bound used: {:.3f}); cost {:.3g} us + {:.3g} us "
+                     "per ray, ray increments shrink by {:.3f} per level; base variance {:.4g}\n",
+                     model.decay, model.decayUpper, model.costIntercept * 1e6, model.costPerRay * 1e6,
+                     model.raySurvival, baseVariance);
     return s;
 }
 

@@ -3,11 +3,22 @@
 // pmf is then the member of the geometric or power-law family that minimises the predicted
 // (variance x cost) of the single-term estimator,
 //     V(p) = V_base + sum_j E[D_j^2] / p(j),     C(p) = sum_j p(j) c_j,
-// (for the sum estimator p(j) in V is replaced by P(N >= j), covariances left out),
-// with the measured levels extended by a fitted tail (geometric decay of E[D_j^2], linear cost).
+// (for the sum estimator p(j) in V is replaced by P(N >= j), covariances left out).
 // The ideal unconstrained pmf, p(j) proportional to sqrt(E[D_j^2] / c_j) (Rhee and Glynn 2015),
 // is reported beside it. Second moments are weighted per pixel by 1 / (base^2 + 1e-2), the
 // weighting of the relative MSE that `telescope converge` measures.
+//
+// The model behind the prediction is deliberately pessimistic about the tail, because the two
+// mistakes cost very differently: a pmf whose tail is too heavy wastes a constant factor, one whose
+// tail is too light has infinite variance (E[D^2]/p(j) stops decaying). A few pilot samples
+// underestimate the deep levels' second moments (their corrections are rare and large), so
+//   - E[D_j^2] is fitted by a line in log space over the measured levels, each level weighted by
+//     its measured relative standard error, and the tail beyond them decays at the fit's upper
+//     confidence bound (two standard errors);
+//   - a measured level below the fitted line is replaced by the line (never lowered);
+//   - the cost of a level is a + b (rays per path), fitted on the measured levels; rays per path
+//     beyond them grow by increments that shrink at the measured survival ratio (constant for a
+//     closed, lossless scene), up to the tracer's depth cap.
 #pragma once
 
 #include <cstdint>
@@ -23,6 +34,22 @@ struct PilotLevel {
     uint32_t level = 0;          // m = j - k
     double secondMoment = 0.0;   // weighted E[D_j^2]
     double secondsPerPath = 0.0; // GPU time of one sample at this level
+    double relativeError = 0.0;  // standard error of secondMoment / secondMoment (pixel spread)
+    double raysPerPath = 0.0;    // rays traced by one sample at this level
+};
+
+// The fitted model the prediction extrapolates with (fitPilotModel).
+struct PilotModel {
+    std::vector<double> secondMoment;  // per measured level: max(measured, fitted line)
+    double decay = 0.0;       // fitted E[D_{m+1}^2] / E[D_m^2]
+    double decayUpper = 0.0;  // its upper bound (two standard errors), used beyond the levels
+    double costIntercept = 0.0, costPerRay = 0.0;  // seconds per path = a + b rays
+    std::vector<double> rays;  // rays per path per measured level (non-decreasing)
+    double raySurvival = 0.0;  // ratio of successive ray increments beyond the measured levels
+    uint32_t levelCap = 0;     // levels beyond this add nothing (the tracer's depth cap)
+    double secondMomentAt(uint32_t m) const;
+    double logSecondMomentAt(uint32_t m) const;  // -inf where E[D^2] is 0
+    double costAt(uint32_t m) const;
 };
 
 struct PmfCandidate {
@@ -35,8 +62,8 @@ struct PmfCandidate {
 struct PmfPilotResult {
     std::vector<PilotLevel> levels;
     double baseVariance = 0.0;     // weighted variance of the base I(k) per sample
-    double tailDecay = 0.0;        // fitted E[D_{j+1}^2] / E[D_j^2] beyond the measured levels
-    double tailCostSlope = 0.0;    // fitted seconds per path added per level
+    uint32_t levelCap = 4096;      // deepest level that can contribute (set by the pilot)
+    PilotModel model;              // fitPilotModel
     std::vector<double> idealPmf;  // sqrt(E[D_j^2]/c_j), normalised over the measured levels
     PmfCandidate chosen, geometricDefault, powerLawDefault;
     double pilotGpuSeconds = 0.0;
@@ -50,8 +77,15 @@ struct PmfPilotResult {
 // pilot_levels) and returns the measurements and the chosen pmf.
 PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& scene, uint32_t seed);
 
-// The prediction of V(p) and C(p) from pilot measurements (exposed for tests).
+// Fits pilot.model from pilot.levels (exposed for tests).
+void fitPilotModel(PmfPilotResult& pilot);
+
+// The prediction of V(p) and C(p) from the fitted model (exposed for tests).
 PmfCandidate predictPmf(const PmfPilotResult& pilot, const PmfSettings& pmf, DebiasEstimator estimator);
+
+// Fits the model and fills the ideal pmf, the two defaults' predictions and the chosen pmf: the
+// geometric r or power-law alpha (0.02 to 0.98) with the smallest predicted variance x cost.
+void choosePmf(PmfPilotResult& pilot, DebiasEstimator estimator);
 
 // When the scene asks for pmf "auto", runs the pilot and replaces the pmf by the chosen one;
 // returns true (and the pilot in *result) when it did.
