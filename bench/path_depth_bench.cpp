@@ -2,8 +2,12 @@
 // for several k. Run through bench/run, which writes docs/BENCHMARKS.md.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <cctype>
 #include <fstream>
+#include <map>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <thread>
 
@@ -36,6 +40,7 @@ void pathsPerSecond(benchmark::State& state, const Scene& scene) {
     }
     const double paths = double(state.iterations()) * spp * 256.0 * 256.0;
     state.counters["paths_per_s"] = benchmark::Counter(paths, benchmark::Counter::kIsRate);
+    state.counters["k"] = double(scene.integrator.maxBounces);
     state.SetLabel(context().info().name);
 }
 
@@ -83,17 +88,36 @@ public:
         ConsoleReporter::ReportRuns(runs);
         for (const auto& r : runs) rows_.push_back(r);
     }
+    // "pathTracing/single_term/4/real_time" -> ("pathTracing/single_term", k from the counter).
     std::string table() const {
         std::string s = "| benchmark | k | Mpaths/s | ms per 16 spp |\n|---|---|---|---|\n";
+        std::map<std::string, double> rate;
         for (const auto& r : rows_) {
-            std::string name = r.benchmark_name();
-            auto slash = name.rfind('/');
-            std::string k = name.substr(slash + 1, name.find('/', slash + 1) - slash - 1);
+            std::vector<std::string> parts;
+            std::stringstream ss(r.benchmark_name());
+            for (std::string p; std::getline(ss, p, '/');)
+                if (p != "real_time" && !std::all_of(p.begin(), p.end(), [](unsigned char c) { return std::isdigit(c) != 0; })) parts.push_back(p);
+            std::string name;
+            for (const auto& p : parts) name += (name.empty() ? "" : "/") + p;
             auto it = r.counters.find("paths_per_s");
-            double rate = it == r.counters.end() ? 0.0 : double(it->second);
-            s += fmt::format("| {} | {} | {:.2f} | {:.0f} |\n", name.substr(0, name.find('/')), k, rate * 1e-6,
-                             r.GetAdjustedRealTime());
+            rate[name] = it == r.counters.end() ? 0.0 : double(it->second);
+            auto k = r.counters.find("k");
+            s += fmt::format("| {} | {} | {:.2f} | {:.0f} |\n", name, k == r.counters.end() ? 0 : int(k->second),
+                             rate[name] * 1e-6, r.GetAdjustedRealTime());
         }
+        // Level scheduling: the three schedules have the same per-pixel variance, so a paths/s
+        // ratio is the inverse work x MSE ratio.
+        std::string ratios;
+        for (const char* scene : {"cornell", "furnace"}) {
+            const std::string base = fmt::format("levelSchedule/{}_", scene);
+            const double perPixel = rate[base + "per_pixel"], queued = rate[base + "queued"],
+                         uniform = rate[base + "uniform"];
+            if (perPixel > 0.0 && queued > 0.0 && uniform > 0.0)
+                ratios += fmt::format("- {}: uniform runs at {:.2f}x the paths/s of per_pixel (what per-pixel levels cost "
+                                      "in divergence); queued at {:.2f}x (work x MSE {:.2f}x per_pixel's)\n",
+                                      scene, uniform / perPixel, queued / perPixel, perPixel / queued);
+        }
+        if (!ratios.empty()) s += "\nLevel scheduling, measured in this run:\n\n" + ratios;
         return s;
     }
 
