@@ -58,6 +58,8 @@ void pathTracing(benchmark::State& state, const std::string& debias) {
 // pixel sample (per_pixel), sorted into a level queue first (queued: identical samples), or one
 // level per sample index for all pixels (uniform: same per-pixel variance, correlated pixels).
 // The per-pixel variance is the same for the three, so paths/s ratios are work x MSE ratios.
+// 15 s each: an iteration of `uniform` is 16 level draws for the whole image, so its rate varies
+// from iteration to iteration far more than the others'.
 void levelSchedule(benchmark::State& state, const std::string& sceneFile, const std::string& schedule) {
     std::vector<SceneOverride> overrides = {
         {"camera.resolution", "[256,256]"},
@@ -70,12 +72,12 @@ void levelSchedule(benchmark::State& state, const std::string& sceneFile, const 
 
 }  // namespace
 
-BENCHMARK_CAPTURE(levelSchedule, cornell_per_pixel, "cornell-box.json", "per_pixel")->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(levelSchedule, cornell_queued, "cornell-box.json", "queued")->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(levelSchedule, cornell_uniform, "cornell-box.json", "uniform")->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(levelSchedule, furnace_per_pixel, "furnace.json", "per_pixel")->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(levelSchedule, furnace_queued, "furnace.json", "queued")->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(levelSchedule, furnace_uniform, "furnace.json", "uniform")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(levelSchedule, cornell_per_pixel, "cornell-box.json", "per_pixel")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(15);
+BENCHMARK_CAPTURE(levelSchedule, cornell_queued, "cornell-box.json", "queued")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(15);
+BENCHMARK_CAPTURE(levelSchedule, cornell_uniform, "cornell-box.json", "uniform")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(15);
+BENCHMARK_CAPTURE(levelSchedule, furnace_per_pixel, "furnace.json", "per_pixel")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(15);
+BENCHMARK_CAPTURE(levelSchedule, furnace_queued, "furnace.json", "queued")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(15);
+BENCHMARK_CAPTURE(levelSchedule, furnace_uniform, "furnace.json", "uniform")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(15);
 
 BENCHMARK_CAPTURE(pathTracing, biased, std::string())->Arg(1)->Arg(4)->Arg(16)->Arg(64)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(pathTracing, single_term, std::string("single_term"))->Arg(1)->Arg(4)->Arg(16)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -88,15 +90,18 @@ public:
         ConsoleReporter::ReportRuns(runs);
         for (const auto& r : runs) rows_.push_back(r);
     }
-    // "pathTracing/single_term/4/real_time" -> ("pathTracing/single_term", k from the counter).
+    // "pathTracing/single_term/4/min_time:15.000/real_time" -> "pathTracing/single_term" (k: a counter).
     std::string table() const {
         std::string s = "| benchmark | k | Mpaths/s | ms per 16 spp |\n|---|---|---|---|\n";
         std::map<std::string, double> rate;
         for (const auto& r : rows_) {
             std::vector<std::string> parts;
             std::stringstream ss(r.benchmark_name());
+            auto isNumber = [](const std::string& p) {
+                return std::all_of(p.begin(), p.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+            };
             for (std::string p; std::getline(ss, p, '/');)
-                if (p != "real_time" && !std::all_of(p.begin(), p.end(), [](unsigned char c) { return std::isdigit(c) != 0; })) parts.push_back(p);
+                if (p != "real_time" && p.find(':') == std::string::npos && !isNumber(p)) parts.push_back(p);
             std::string name;
             for (const auto& p : parts) name += (name.empty() ? "" : "/") + p;
             auto it = r.counters.find("paths_per_s");
