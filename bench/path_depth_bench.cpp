@@ -58,26 +58,47 @@ void pathTracing(benchmark::State& state, const std::string& debias) {
 // pixel sample (per_pixel), sorted into a level queue first (queued: identical samples), or one
 // level per sample index for all pixels (uniform: same per-pixel variance, correlated pixels).
 // The per-pixel variance is the same for the three, so paths/s ratios are work x MSE ratios.
-// 15 s each: an iteration of `uniform` is 16 level draws for the whole image, so its rate varies
-// from iteration to iteration far more than the others'.
-void levelSchedule(benchmark::State& state, const std::string& sceneFile, const std::string& schedule) {
-    std::vector<SceneOverride> overrides = {
-        {"camera.resolution", "[256,256]"},
-        {"integrator.max_bounces", "1"},
-        {"integrator.debias", R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.3},"level_schedule":")" +
-                                  schedule + R"("})"}};
-    Scene scene = loadScene(std::string(TELESCOPE_SOURCE_DIR) + "/scenes/" + sceneFile, overrides);
-    pathsPerSecond(state, scene);
+// The three renderers take turns, 16 spp each per iteration, so that the slow drifts of a shared
+// machine's speed (tens of percent over minutes here) fall on all three alike; each one's time is
+// its own renders' wall time.
+const char* const kSchedules[] = {"per_pixel", "queued", "uniform"};
+
+void levelSchedule(benchmark::State& state, const std::string& sceneFile) {
+    std::vector<Scene> scenes;
+    std::vector<std::unique_ptr<Renderer>> renderers;
+    for (const char* schedule : kSchedules) {
+        std::vector<SceneOverride> overrides = {
+            {"camera.resolution", "[256,256]"},
+            {"integrator.max_bounces", "1"},
+            {"integrator.debias", std::string(R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.3},)") +
+                                      R"("level_schedule":")" + schedule + R"("})"}};
+        scenes.push_back(loadScene(std::string(TELESCOPE_SOURCE_DIR) + "/scenes/" + sceneFile, overrides));
+    }
+    for (const Scene& scene : scenes) {
+        renderers.push_back(std::make_unique<Renderer>(context(), scene, 1));
+        RenderRequest warmup;
+        warmup.spp = 4;  // first dispatch compiles the pipeline
+        renderers.back()->render(warmup);
+    }
+    double seconds[3] = {0.0, 0.0, 0.0};
+    for (auto _ : state)
+        for (size_t i = 0; i < renderers.size(); ++i) {
+            RenderRequest request;
+            request.spp = 16;
+            const double before = renderers[i]->stats().wallSeconds;
+            renderers[i]->render(request);
+            seconds[i] += renderers[i]->stats().wallSeconds - before;
+        }
+    const double paths = double(state.iterations()) * 16.0 * 256.0 * 256.0;
+    for (size_t i = 0; i < 3; ++i) state.counters[std::string(kSchedules[i]) + "_paths_per_s"] = paths / seconds[i];
+    state.counters["k"] = 1.0;
+    state.SetLabel(context().info().name);
 }
 
 }  // namespace
 
-BENCHMARK_CAPTURE(levelSchedule, cornell_per_pixel, "cornell-box.json", "per_pixel")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(15);
-BENCHMARK_CAPTURE(levelSchedule, cornell_queued, "cornell-box.json", "queued")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(15);
-BENCHMARK_CAPTURE(levelSchedule, cornell_uniform, "cornell-box.json", "uniform")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(15);
-BENCHMARK_CAPTURE(levelSchedule, furnace_per_pixel, "furnace.json", "per_pixel")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(15);
-BENCHMARK_CAPTURE(levelSchedule, furnace_queued, "furnace.json", "queued")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(15);
-BENCHMARK_CAPTURE(levelSchedule, furnace_uniform, "furnace.json", "uniform")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(15);
+BENCHMARK_CAPTURE(levelSchedule, cornell, "cornell-box.json")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(30);
+BENCHMARK_CAPTURE(levelSchedule, furnace, "furnace.json")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(30);
 
 BENCHMARK_CAPTURE(pathTracing, biased, std::string())->Arg(1)->Arg(4)->Arg(16)->Arg(64)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(pathTracing, single_term, std::string("single_term"))->Arg(1)->Arg(4)->Arg(16)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -104,17 +125,22 @@ public:
                 if (p != "real_time" && p.find(':') == std::string::npos && !isNumber(p)) parts.push_back(p);
             std::string name;
             for (const auto& p : parts) name += (name.empty() ? "" : "/") + p;
-            auto it = r.counters.find("paths_per_s");
-            rate[name] = it == r.counters.end() ? 0.0 : double(it->second);
             auto k = r.counters.find("k");
-            s += fmt::format("| {} | {} | {:.2f} | {:.0f} |\n", name, k == r.counters.end() ? 0 : int(k->second),
-                             rate[name] * 1e-6, r.GetAdjustedRealTime());
+            const int kValue = k == r.counters.end() ? 0 : int(k->second);
+            for (const std::string prefix : {"", "per_pixel_", "queued_", "uniform_"}) {
+                auto it = r.counters.find(prefix + "paths_per_s");
+                if (it == r.counters.end()) continue;
+                const std::string row = prefix.empty() ? name : name + "/" + prefix.substr(0, prefix.size() - 1);
+                rate[row] = double(it->second);
+                s += fmt::format("| {} | {} | {:.2f} | {:.0f} |\n", row, kValue, rate[row] * 1e-6,
+                                 16.0 * 256.0 * 256.0 / rate[row] * 1e3);
+            }
         }
         // Level scheduling: the three schedules have the same per-pixel variance, so a paths/s
         // ratio is the inverse work x MSE ratio.
         std::string ratios;
         for (const char* scene : {"cornell", "furnace"}) {
-            const std::string base = fmt::format("levelSchedule/{}_", scene);
+            const std::string base = fmt::format("levelSchedule/{}/", scene);
             const double perPixel = rate[base + "per_pixel"], queued = rate[base + "queued"],
                          uniform = rate[base + "uniform"];
             if (perPixel > 0.0 && queued > 0.0 && uniform > 0.0)
