@@ -4,27 +4,22 @@
 
 #include <algorithm>
 #include <cctype>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <sstream>
 #include <string>
-#include <thread>
 
 #include <fmt/format.h>
 
+#include "bench_main.h"
 #include "gpu/context.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 
 using namespace telescope;
+using telescope::bench::context;
 
 namespace {
-
-gpu::Context& context() {
-    static gpu::Context ctx{gpu::ContextOptions{}};
-    return ctx;
-}
 
 // Renders 16 spp of a 256x256 scene per iteration and reports paths per second.
 void pathsPerSecond(benchmark::State& state, const Scene& scene) {
@@ -104,71 +99,50 @@ BENCHMARK_CAPTURE(pathTracing, biased, std::string())->Arg(1)->Arg(4)->Arg(16)->
 BENCHMARK_CAPTURE(pathTracing, single_term, std::string("single_term"))->Arg(1)->Arg(4)->Arg(16)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(pathTracing, sum, std::string("sum"))->Arg(1)->Arg(4)->Arg(16)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// ---- Markdown table of the results, next to the usual console output ----
-class MarkdownReporter : public benchmark::ConsoleReporter {
-public:
-    void ReportRuns(const std::vector<Run>& runs) override {
-        ConsoleReporter::ReportRuns(runs);
-        for (const auto& r : runs) rows_.push_back(r);
-    }
-    // "pathTracing/single_term/4/min_time:15.000/real_time" -> "pathTracing/single_term" (k: a counter).
-    std::string table() const {
-        std::string s = "| benchmark | k | Mpaths/s | ms per 16 spp |\n|---|---|---|---|\n";
-        std::map<std::string, double> rate;
-        for (const auto& r : rows_) {
-            std::vector<std::string> parts;
-            std::stringstream ss(r.benchmark_name());
-            auto isNumber = [](const std::string& p) {
-                return std::all_of(p.begin(), p.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
-            };
-            for (std::string p; std::getline(ss, p, '/');)
-                if (p != "real_time" && p.find(':') == std::string::npos && !isNumber(p)) parts.push_back(p);
-            std::string name;
-            for (const auto& p : parts) name += (name.empty() ? "" : "/") + p;
-            auto k = r.counters.find("k");
-            const int kValue = k == r.counters.end() ? 0 : int(k->second);
-            for (const std::string prefix : {"", "per_pixel_", "queued_", "uniform_"}) {
-                auto it = r.counters.find(prefix + "paths_per_s");
-                if (it == r.counters.end()) continue;
-                const std::string row = prefix.empty() ? name : name + "/" + prefix.substr(0, prefix.size() - 1);
-                rate[row] = double(it->second);
-                s += fmt::format("| {} | {} | {:.2f} | {:.0f} |\n", row, kValue, rate[row] * 1e-6,
-                                 16.0 * 256.0 * 256.0 / rate[row] * 1e3);
-            }
-        }
-        // Level scheduling: the three schedules have the same per-pixel variance, so a paths/s
-        // ratio is the inverse work x MSE ratio.
-        std::string ratios;
-        for (const char* scene : {"cornell", "furnace"}) {
-            const std::string base = fmt::format("levelSchedule/{}/", scene);
-            const double perPixel = rate[base + "per_pixel"], queued = rate[base + "queued"],
-                         uniform = rate[base + "uniform"];
-            if (perPixel > 0.0 && queued > 0.0 && uniform > 0.0)
-                ratios += fmt::format("- {}: uniform runs at {:.2f}x the paths/s of per_pixel (what per-pixel levels cost "
-                                      "in divergence); queued at {:.2f}x (work x MSE {:.2f}x per_pixel's)\n",
-                                      scene, uniform / perPixel, queued / perPixel, perPixel / queued);
-        }
-        if (!ratios.empty()) s += "\nLevel scheduling, measured in this run:\n\n" + ratios;
-        return s;
-    }
+// ---- Markdown table of the results ----
+namespace {
 
-private:
-    std::vector<Run> rows_;
-};
-
-int main(int argc, char** argv) {
-    std::string markdown;
-    for (int i = 1; i < argc; ++i)
-        if (std::string(argv[i]).rfind("--markdown=", 0) == 0) markdown = std::string(argv[i]).substr(11);
-    benchmark::Initialize(&argc, argv);
-    MarkdownReporter reporter;
-    benchmark::RunSpecifiedBenchmarks(&reporter);
-    if (!markdown.empty()) {
-        std::ofstream out(markdown);
-        out << fmt::format("Device: {}; host threads: {}.\n\n", context().info().name,
-                           std::thread::hardware_concurrency())
-            << reporter.table();
+// "pathTracing/single_term/4/min_time:15.000/real_time" -> "pathTracing/single_term" (k: a counter).
+std::string table(const bench::Runs& runs) {
+    std::string s = "\n| benchmark | k | Mpaths/s | ms per 16 spp |\n|---|---|---|---|\n";
+    std::map<std::string, double> rate;
+    for (const auto& r : runs) {
+        std::vector<std::string> parts;
+        std::stringstream ss(r.benchmark_name());
+        auto isNumber = [](const std::string& p) {
+            return std::all_of(p.begin(), p.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+        };
+        for (std::string p; std::getline(ss, p, '/');)
+            if (p != "real_time" && p.find(':') == std::string::npos && !isNumber(p)) parts.push_back(p);
+        std::string name;
+        for (const auto& p : parts) name += (name.empty() ? "" : "/") + p;
+        auto k = r.counters.find("k");
+        const int kValue = k == r.counters.end() ? 0 : int(k->second);
+        for (const std::string prefix : {"", "per_pixel_", "queued_", "uniform_"}) {
+            auto it = r.counters.find(prefix + "paths_per_s");
+            if (it == r.counters.end()) continue;
+            const std::string row = prefix.empty() ? name : name + "/" + prefix.substr(0, prefix.size() - 1);
+            rate[row] = double(it->second);
+            s += fmt::format("| {} | {} | {:.2f} | {:.0f} |\n", row, kValue, rate[row] * 1e-6,
+                             16.0 * 256.0 * 256.0 / rate[row] * 1e3);
+        }
     }
-    benchmark::Shutdown();
-    return 0;
+    // Level scheduling: the three schedules have the same per-pixel variance, so a paths/s
+    // ratio is the inverse work x MSE ratio.
+    std::string ratios;
+    for (const char* scene : {"cornell", "furnace"}) {
+        const std::string base = fmt::format("levelSchedule/{}/", scene);
+        const double perPixel = rate[base + "per_pixel"], queued = rate[base + "queued"],
+                     uniform = rate[base + "uniform"];
+        if (perPixel > 0.0 && queued > 0.0 && uniform > 0.0)
+            ratios += fmt::format("- {}: uniform runs at {:.2f}x the paths/s of per_pixel (what per-pixel levels cost "
+                                  "in divergence); queued at {:.2f}x (work x MSE {:.2f}x per_pixel's)\n",
+                                  scene, uniform / perPixel, queued / perPixel, perPixel / queued);
+    }
+    if (!ratios.empty()) s += "\nLevel scheduling, measured in this run:\n\n" + ratios;
+    return s;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return bench::runWithMarkdown(argc, argv, table); }

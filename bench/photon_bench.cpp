@@ -7,26 +7,21 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <fmt/format.h>
 
+#include "bench_main.h"
 #include "gpu/context.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 
 using namespace telescope;
+using telescope::bench::context;
 
 namespace {
-
-gpu::Context& context() {
-    static gpu::Context ctx{gpu::ContextOptions{}};
-    return ctx;
-}
 
 Scene planeScene(uint32_t resolution, const std::string& integrator) {
     return loadScene(std::string(TELESCOPE_SOURCE_DIR) + "/scenes/point-plane-photon.json",
@@ -186,36 +181,34 @@ BENCHMARK_CAPTURE(convergence, ppm, std::string("progressive photon mapping"), s
 BENCHMARK_CAPTURE(convergence, unbiased, std::string("unbiased photon mapping"), std::string(kUnbiased))->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 BENCHMARK_CAPTURE(convergence, unbiased_progressive, std::string("unbiased progressive photon mapping"), std::string(kUnbiasedProgressive))->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 
-int main(int argc, char** argv) {
-    std::string markdown;
-    for (int i = 1; i < argc; ++i)
-        if (std::string(argv[i]).rfind("--markdown=", 0) == 0) markdown = std::string(argv[i]).substr(11);
-    benchmark::Initialize(&argc, argv);
-    benchmark::RunSpecifiedBenchmarks();
-    if (!markdown.empty()) {
-        std::ofstream out(markdown);
-        out << fmt::format("Device: {}; host threads: {}.\n\n", context().info().name, std::thread::hardware_concurrency());
-        if (!gPassRows.empty()) {
-            out << "| photon paths N | stored photons | photon_trace ms | Mpaths/s | hash_grid_build ms | Mphotons/s sorted | "
-                   "gather ms (64x64) | gathers/s | bytes per stored photon |\n|---|---|---|---|---|---|---|---|---|\n";
-            for (const auto& [n, r] : gPassRows)
-                out << fmt::format("| {} | {:.0f} | {:.1f} | {:.2f} | {:.1f} | {:.1f} | {:.1f} | {:.0f} | {:.1f} |\n", n,
-                                   r.at("stored"), r.at("trace_ms"), r.at("paths_per_s") * 1e-6, r.at("grid_ms"),
-                                   r.at("grid_photons_per_s") * 1e-6, r.at("gather_ms"), r.at("gathers_per_s"),
-                                   r.at("bytes_per_photon"));
-            out << "\n";
-        }
-        if (!gConvergence.empty()) {
-            out << "| method | passes | mean MSE (8 seeds) | median MSE | seconds |\n|---|---|---|---|---|\n";
-            for (const auto& c : gConvergence)
-                for (size_t i = 0; i < c.passes.size(); ++i)
-                    out << fmt::format("| {} | {} | {:.3e} | {:.3e} | {:.2f} |\n", c.label, c.passes[i], c.meanMse[i],
-                                       c.medianMse[i], c.seconds[i]);
-            out << "\n| method | MSE slope vs passes (mean) | (median) | MSE slope vs time (mean) |\n|---|---|---|---|\n";
-            for (const auto& c : gConvergence)
-                out << fmt::format("| {} | {:.2f} | {:.2f} | {:.2f} |\n", c.label, c.slopeMean, c.slopeMedian, c.slopeTime);
-        }
+// ---- Markdown tables (from the rows the benchmarks recorded) ----
+namespace {
+
+std::string tables(const bench::Runs&) {
+    std::string out = "\n";
+    if (!gPassRows.empty()) {
+        out += "| photon paths N | stored photons | photon_trace ms | Mpaths/s | hash_grid_build ms | Mphotons/s sorted | "
+               "gather ms (64x64) | gathers/s | bytes per stored photon |\n|---|---|---|---|---|---|---|---|---|\n";
+        for (const auto& [n, r] : gPassRows)
+            out += fmt::format("| {} | {:.0f} | {:.1f} | {:.2f} | {:.1f} | {:.1f} | {:.1f} | {:.0f} | {:.1f} |\n", n,
+                               r.at("stored"), r.at("trace_ms"), r.at("paths_per_s") * 1e-6, r.at("grid_ms"),
+                               r.at("grid_photons_per_s") * 1e-6, r.at("gather_ms"), r.at("gathers_per_s"),
+                               r.at("bytes_per_photon"));
+        out += "\n";
     }
-    benchmark::Shutdown();
-    return 0;
+    if (!gConvergence.empty()) {
+        out += "| method | passes | mean MSE (8 seeds) | median MSE | seconds |\n|---|---|---|---|---|\n";
+        for (const auto& c : gConvergence)
+            for (size_t i = 0; i < c.passes.size(); ++i)
+                out += fmt::format("| {} | {} | {:.3e} | {:.3e} | {:.2f} |\n", c.label, c.passes[i], c.meanMse[i],
+                                   c.medianMse[i], c.seconds[i]);
+        out += "\n| method | MSE slope vs passes (mean) | (median) | MSE slope vs time (mean) |\n|---|---|---|---|\n";
+        for (const auto& c : gConvergence)
+            out += fmt::format("| {} | {:.2f} | {:.2f} | {:.2f} |\n", c.label, c.slopeMean, c.slopeMedian, c.slopeTime);
+    }
+    return out;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return bench::runWithMarkdown(argc, argv, tables); }

@@ -5,27 +5,22 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <fmt/format.h>
 
+#include "bench_main.h"
 #include "gpu/context.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "shared/transmittance_estimators.h"
 
 using namespace telescope;
+using telescope::bench::context;
 
 namespace {
-
-gpu::Context& context() {
-    static gpu::Context ctx{gpu::ContextOptions{}};
-    return ctx;
-}
 
 const std::map<std::string, std::string> kEstimators = {
     {"ray_march_k1", R"({"type":"ray_march","level":1})"},
@@ -179,70 +174,51 @@ BENCHMARK_CAPTURE(lookupsPerSecond, residual_ratio_tracking, shader::kTrEstResid
 BENCHMARK_CAPTURE(lookupsPerSecond, unbiased_ray_march, shader::kTrEstUnbiasedRayMarch);
 BENCHMARK(debiasedMseSlope)->Iterations(1)->Unit(benchmark::kSecond);
 
-// ---- Markdown tables next to the console output ----
-class MarkdownReporter : public benchmark::ConsoleReporter {
-public:
-    void ReportRuns(const std::vector<Run>& runs) override {
-        ConsoleReporter::ReportRuns(runs);
-        for (const auto& r : runs) rows_.push_back(r);
-    }
-    std::string tables() const {
-        auto counter = [](const Run& r, const char* name) {
-            auto it = r.counters.find(name);
-            return it == r.counters.end() ? 0.0 : double(it->second);
-        };
-        auto label = [](const Run& r) {
-            std::string n = r.benchmark_name();
-            std::string s = n.substr(n.find('/') + 1);
-            return s.substr(0, s.find('/'));
-        };
-        std::string s;
-        for (const char* scene : {"slab_", "smoke_"}) {
-            double ratio = 0.0;
-            for (const auto& r : rows_)
-                if (label(r) == std::string(scene) + "ratio_tracking") ratio = counter(r, "work_x_mse");
-            s += std::string(scene) == "slab_"
-                     ? "\n**Absorbing slab** (64x64, 64 spp; MSE per pixel against the closed form):\n\n"
-                     : "\n**Smoke box** (48x36, 16 spp; MSE = variance of the pixel mean, unbiased estimators):\n\n";
-            s += "| estimator | render s | MSE | work x MSE | / ratio tracking |\n|---|---|---|---|---|\n";
-            for (const auto& r : rows_) {
-                std::string l = label(r);
-                if (l.rfind(scene, 0) != 0) continue;
-                double w = counter(r, "work_x_mse");
-                s += fmt::format("| {} | {:.3f} | {:.3g} | {:.3g} | {:.2f} |\n", l.substr(std::string(scene).size()),
-                                 counter(r, "render_s"), counter(r, "mse"), w, ratio > 0 ? w / ratio : 0.0);
-            }
+// ---- Markdown tables of the results ----
+namespace {
+
+std::string tables(const bench::Runs& runs) {
+    using Run = benchmark::BenchmarkReporter::Run;
+    auto counter = [](const Run& r, const char* name) {
+        auto it = r.counters.find(name);
+        return it == r.counters.end() ? 0.0 : double(it->second);
+    };
+    auto label = [](const Run& r) {
+        std::string n = r.benchmark_name();
+        std::string s = n.substr(n.find('/') + 1);
+        return s.substr(0, s.find('/'));
+    };
+    std::string s;
+    for (const char* scene : {"slab_", "smoke_"}) {
+        double ratio = 0.0;
+        for (const auto& r : runs)
+            if (label(r) == std::string(scene) + "ratio_tracking") ratio = counter(r, "work_x_mse");
+        s += std::string(scene) == "slab_"
+                 ? "\n**Absorbing slab** (64x64, 64 spp; MSE per pixel against the closed form):\n\n"
+                 : "\n**Smoke box** (48x36, 16 spp; MSE = variance of the pixel mean, unbiased estimators):\n\n";
+        s += "| estimator | render s | MSE | work x MSE | / ratio tracking |\n|---|---|---|---|---|\n";
+        for (const auto& r : runs) {
+            std::string l = label(r);
+            if (l.rfind(scene, 0) != 0) continue;
+            double w = counter(r, "work_x_mse");
+            s += fmt::format("| {} | {:.3f} | {:.3g} | {:.3g} | {:.2f} |\n", l.substr(std::string(scene).size()),
+                             counter(r, "render_s"), counter(r, "mse"), w, ratio > 0 ? w / ratio : 0.0);
         }
-        s += "\n**Density lookups per second** (shared estimator code on one CPU thread, exponential falloff "
-             "segment, tau = 1.5):\n\n| estimator | Mlookups/s | lookups per estimate |\n|---|---|---|\n";
-        for (const auto& r : rows_)
-            if (r.benchmark_name().rfind("lookupsPerSecond", 0) == 0)
-                s += fmt::format("| {} | {:.1f} | {:.2f} |\n", label(r), counter(r, "lookups_per_s") * 1e-6,
-                                 counter(r, "lookups_per_estimate"));
-        for (const auto& r : rows_)
-            if (r.benchmark_name().rfind("debiasedMseSlope", 0) == 0)
-                s += fmt::format("\n**MSE slope of debiased marching** (Davis c = 0.8, sine density, N = 2^4..2^14 "
-                                 "estimates, 200 repetitions each): {:.3f} (theory: -1).\n",
-                                 counter(r, "mse_slope"));
-        return s;
     }
-
-private:
-    std::vector<Run> rows_;
-};
-
-int main(int argc, char** argv) {
-    std::string markdown;
-    for (int i = 1; i < argc; ++i)
-        if (std::string(argv[i]).rfind("--markdown=", 0) == 0) markdown = std::string(argv[i]).substr(11);
-    benchmark::Initialize(&argc, argv);
-    MarkdownReporter reporter;
-    benchmark::RunSpecifiedBenchmarks(&reporter);
-    if (!markdown.empty()) {
-        std::ofstream out(markdown);
-        out << fmt::format("Device: {}; host threads: {}.\n", context().info().name, std::thread::hardware_concurrency())
-            << reporter.tables();
-    }
-    benchmark::Shutdown();
-    return 0;
+    s += "\n**Density lookups per second** (shared estimator code on one CPU thread, exponential falloff "
+         "segment, tau = 1.5):\n\n| estimator | Mlookups/s | lookups per estimate |\n|---|---|---|\n";
+    for (const auto& r : runs)
+        if (r.benchmark_name().rfind("lookupsPerSecond", 0) == 0)
+            s += fmt::format("| {} | {:.1f} | {:.2f} |\n", label(r), counter(r, "lookups_per_s") * 1e-6,
+                             counter(r, "lookups_per_estimate"));
+    for (const auto& r : runs)
+        if (r.benchmark_name().rfind("debiasedMseSlope", 0) == 0)
+            s += fmt::format("\n**MSE slope of debiased marching** (Davis c = 0.8, sine density, N = 2^4..2^14 "
+                             "estimates, 200 repetitions each): {:.3f} (theory: -1).\n",
+                             counter(r, "mse_slope"));
+    return s;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return bench::runWithMarkdown(argc, argv, tables); }

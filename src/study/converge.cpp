@@ -17,22 +17,13 @@
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "study/pmf_pilot.h"
+#include "study/study_files.h"
 
 namespace fs = std::filesystem;
 
 namespace telescope {
 
 namespace {
-
-void writeTextAtomically(const std::string& path, const std::string& text) {
-    std::string tmp = path + ".partial";
-    {
-        std::ofstream f(tmp, std::ios::trunc);
-        f << text;
-        if (!f.flush()) throw std::runtime_error(fmt::format("{}: write failed", path));
-    }
-    fs::rename(tmp, path);
-}
 
 std::string csvQuote(const std::string& s) {
     std::string q = "\"";
@@ -77,19 +68,14 @@ void appendPanel(std::vector<std::vector<float>>& rows, const Crop& c, int width
     }
 }
 
-// A point of the plotted curve: a single run's slice, or the mean over seeds.
-bool onCurve(const ConvergeReport& report, const ConvergePoint& p) {
-    for (const auto& q : report.points)
-        if (q.seed == kAllSeeds) return p.seed == kAllSeeds;
-    return true;
-}
-
-std::string gnuplotScript(const ConvergeReport& report, const std::string& pngName) {
+// Plots each method's curve: its single run's slices, or (seeds > 1) the means over the seeds.
+std::string gnuplotScript(const ConvergeReport& report, bool severalSeeds, const std::string& pngName) {
     std::string s;
     for (size_t m = 0; m < report.methods.size(); ++m) {
         s += fmt::format("$m{} << EOD\n", m);
         for (const auto& p : report.points)
-            if (p.method == report.methods[m].method.label && p.gpuSeconds > 0.0 && onCurve(report, p))
+            if (p.method == report.methods[m].method.label && p.gpuSeconds > 0.0 &&
+                (p.seed == kAllSeeds) == severalSeeds)
                 s += fmt::format("{:.9g} {:.9g} {:.9g}\n", p.gpuSeconds, p.error.relMse,
                                  std::abs(p.error.relMeanError));
         s += "EOD\n";
@@ -295,7 +281,7 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
     writeSrgbPng(out("strip.png"), int(strip.front().size() / 3), int(strip.size()), stripPixels);
     report.files.push_back(out("strip.png"));
 
-    writeTextAtomically(out("convergence.gp"), gnuplotScript(report, "convergence.png.partial"));
+    writeTextAtomically(out("convergence.gp"), gnuplotScript(report, o.seedCount > 1, "convergence.png.partial"));
     report.files.push_back(out("convergence.gp"));
     std::string plotCommand = fmt::format("cd '{}' && gnuplot convergence.gp 2>&1", o.outDir);
     bool plotted = std::system(plotCommand.c_str()) == 0 && fs::exists(out("convergence.png.partial"));

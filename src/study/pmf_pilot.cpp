@@ -1,7 +1,6 @@
 #include "study/pmf_pilot.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 

@@ -15,6 +15,7 @@
 #include "gpu/pipeline.h"
 #include "shared/transmittance_estimators.h"
 #include "shared/transmittance_study.h"
+#include "study/study_files.h"
 
 namespace fs = std::filesystem;
 
@@ -87,11 +88,6 @@ std::vector<Problem> problems() {
     return out;
 }
 
-void writeText(const std::string& path, const std::string& text) {
-    std::ofstream f(path, std::ios::trunc);
-    f << text;
-    if (!f.flush()) throw std::runtime_error(fmt::format("{}: write failed", path));
-}
 
 }  // namespace
 
@@ -181,7 +177,7 @@ TransmittanceStudyReport runTransmittanceStudy(gpu::Context& context, const Tran
                            r.profile, r.target, r.looseness, r.mean, truth, r.variance, r.mean - truth, r.mse, r.lookups,
                            r.workTimesRelMse(), r.maxAbs);
     }
-    writeText(out("transmittance.csv"), csv);
+    writeTextAtomically(out("transmittance.csv"), csv);
     report.files.push_back(out("transmittance.csv"));
 
     // ---- Heat maps: one PNG per estimator, a panel per (model, profile) ----
@@ -206,7 +202,7 @@ TransmittanceStudyReport runTransmittanceStudy(gpu::Context& context, const Tran
             }
         }
         const std::string dat = "heat_" + e.name + ".dat";
-        writeText(out(dat), data);
+        writeTextAtomically(out(dat), data);
         std::string xtics, ytics;
         for (size_t i = 0; i < std::size(kTargets); ++i) xtics += fmt::format("{}\"{}\" {}", i ? ", " : "", kTargets[i], i);
         for (size_t i = 0; i < std::size(kLooseness); ++i) ytics += fmt::format("{}\"{}\" {}", i ? ", " : "", kLooseness[i], i);
@@ -221,7 +217,7 @@ TransmittanceStudyReport runTransmittanceStudy(gpu::Context& context, const Tran
         for (size_t i = 0; i < panels.size(); ++i)
             gp += fmt::format("set title '{}'\nplot '{}' index {} using 1:2:3 with image notitle\n", panels[i], dat, i);
         gp += "unset multiplot\n";
-        writeText(out("heat_" + e.name + ".gp"), gp);
+        writeTextAtomically(out("heat_" + e.name + ".gp"), gp);
         const bool ok = std::system(fmt::format("cd '{}' && gnuplot heat_{}.gp >/dev/null 2>&1", o.outDir, e.name).c_str()) == 0 &&
                         fs::exists(out("heat_" + e.name + ".png.partial"));
         if (ok) {
@@ -275,7 +271,7 @@ TransmittanceStudyReport runTransmittanceStudy(gpu::Context& context, const Tran
     md += "\nHeat maps: `heat_<estimator>.png`; data: `transmittance.csv`. Ray marching is biased: its bias is part of "
           "its MSE (the |bias| column shows it; a statistically significant bias needs |bias| well above "
           "sqrt(variance / estimates)).\n";
-    writeText(out("summary.md"), md);
+    writeTextAtomically(out("summary.md"), md);
     report.files.push_back(out("summary.md"));
     return report;
 }
