@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fstream>
 
 #include "bench_main.h"
 #include "gpu/context.h"
@@ -37,7 +38,7 @@ void photonPass(benchmark::State& state) {
     const int64_t n = state.range(0);
     const double radius = 0.05 * std::sqrt(double(1 << 20) / double(n));
     Scene scene = planeScene(64, fmt::format(R"({{"type":"photon_map","photon_count":{},"gather_radius":{},
-        "direct_lighting":"photons","debias":{{"estimator":"single_term"}}}})", n, radius));
+        "direct_lighting":"photons"}})", n, radius));
     Renderer renderer(context(), scene, 1);
     RenderRequest one;
     one.spp = 1;
@@ -62,8 +63,17 @@ void photonPass(benchmark::State& state) {
     state.SetLabel(context().info().name);
 }
 
-// ---- RMSE against the analytic plane versus passes ----
-constexpr uint32_t kRes = 32;
+// ---- Error against the analytic plane versus the photon budget ----
+// Progressive photon mapping and unbiased photon mapping (blocks, uniform and per_pixel
+// schedules) at equal photon budgets of 2^4 .. 2^14 passes of N photon paths, over several seeds.
+// Per pixel the relative error e = (estimate - L) / L; per budget, over pixels and seeds: the
+// median and mean of |e| (the typical error), the mean of e^2 (MSE: outlier-dominated, infinite
+// in expectation for the unbiased estimator), the mean of e (bias), and for the uniform schedule
+// the tail z P(|Z - L| > z L) of the block samples Z of the centre pixels.
+constexpr uint32_t kRes = 16;
+constexpr uint32_t kPhotons = 10000;
+constexpr double kRadius = 0.25;
+constexpr uint32_t kMinExp = 4, kMaxExp = 14;
 
 // Box-filtered pixel values of L = (0.5 / pi) / (1 + x^2 + z^2)^1.5 over [-2, 2]^2.
 const std::vector<double>& analytic() {
@@ -85,28 +95,9 @@ const std::vector<double>& analytic() {
     return v;
 }
 
-struct ConvergencePoint {
-    uint64_t passes;
-    double mse, seconds;
-};
-
-std::vector<ConvergencePoint> converge(const std::string& integrator, uint32_t seed, uint64_t maxPasses) {
-    Scene scene = planeScene(kRes, integrator);
-    Renderer renderer(context(), scene, seed);
-    std::vector<ConvergencePoint> out;
-    for (uint64_t passes = 4; passes <= maxPasses; passes *= 2) {
-        RenderRequest r;
-        r.spp = passes - renderer.stats().samplesPerPixel;
-        renderer.render(r);
-        Film film = renderer.film();
-        double se = 0.0;
-        for (size_t i = 0; i < film.pixelCount(); ++i) {
-            double d = film.mean(shader::kChannelEstimate, i).x - analytic()[i];
-            se += d * d;
-        }
-        out.push_back({passes, se / double(film.pixelCount()), renderer.stats().wallSeconds});
-    }
-    return out;
+bool centre(size_t pixel) {
+    const size_t x = pixel % kRes, y = pixel / kRes;
+    return x >= kRes / 2 - 2 && x < kRes / 2 + 2 && y >= kRes / 2 - 2 && y < kRes / 2 + 2;
 }
 
 // Least-squares slope of log(y) against log(x).
@@ -121,65 +112,97 @@ double logLogSlope(const std::vector<double>& x, const std::vector<double>& y) {
     return sxy / sxx;
 }
 
-struct ConvergenceResult {
-    std::string label;
-    std::vector<uint64_t> passes;
-    std::vector<double> meanMse, medianMse, seconds;
-    double slopeMean = 0, slopeMedian = 0, slopeTime = 0;
+struct BudgetStats {
+    uint64_t budget = 0;
+    double passes = 0.0;  // mean passes actually run (a block may end past the budget)
+    std::vector<double> errors;  // relative errors, all pixels and seeds
+    double samples = 0.0;        // mean samples (blocks) per pixel
 };
-std::vector<ConvergenceResult> gConvergence;
 
-void convergence(benchmark::State& state, std::string label, std::string integrator) {
-    const uint64_t maxPasses = 256;
-    const uint32_t seeds = 8;
-    ConvergenceResult res;
+struct MethodResult {
+    std::string label;
+    std::vector<BudgetStats> budgets;
+    std::vector<double> tail;  // |Z - L| / L of the centre pixels' block samples (uniform blocks)
+    double seconds = 0.0;
+    uint64_t passes = 0, samples = 0;
+    double slopeMedian = 0, slopeMeanAbs = 0, slopeMse = 0;
+};
+std::vector<MethodResult> gBudget;
+
+void budgetConvergence(benchmark::State& state, std::string label, std::string integrator, uint32_t seeds, bool blocks) {
+    MethodResult res;
     res.label = label;
+    for (uint32_t e = kMinExp; e <= kMaxExp; ++e) res.budgets.push_back({uint64_t(1) << e, 0.0, {}, 0.0});
+    const auto& want = analytic();
     for (auto _ : state) {
-        std::vector<std::vector<ConvergencePoint>> runs;
-        for (uint32_t s = 0; s < seeds; ++s) runs.push_back(converge(integrator, 1000 + 17 * s, maxPasses));
-        for (size_t i = 0; i < runs[0].size(); ++i) {
-            std::vector<double> mses;
-            double secs = 0;
-            for (auto& r : runs) mses.push_back(r[i].mse), secs += r[i].seconds / seeds;
-            std::sort(mses.begin(), mses.end());
-            double mean = 0;
-            for (double m : mses) mean += m / seeds;
-            res.passes.push_back(runs[0][i].passes);
-            res.meanMse.push_back(mean);
-            res.medianMse.push_back(0.5 * (mses[seeds / 2 - 1] + mses[seeds / 2]));
-            res.seconds.push_back(secs);
+        for (uint32_t s = 0; s < seeds; ++s) {
+            Scene scene = planeScene(kRes, integrator);
+            Renderer renderer(context(), scene, 7000 + 31 * s);
+            size_t next = 0;
+            std::vector<double> before(want.size(), 0.0);
+            while (next < res.budgets.size()) {
+                RenderRequest one;
+                one.spp = 1;
+                renderer.render(one);
+                const uint64_t passes = renderer.stats().photonPasses;
+                const bool record = passes >= res.budgets[next].budget;
+                if (!record && !blocks) continue;
+                Film film = renderer.film();
+                if (blocks)  // the block sample of each centre pixel
+                    for (size_t i = 0; i < want.size(); ++i) {
+                        const double sum = film.sums(shader::kChannelEstimate)[i].x;
+                        if (centre(i)) res.tail.push_back(std::abs(sum - before[i] - want[i]) / want[i]);
+                        before[i] = sum;
+                    }
+                while (next < res.budgets.size() && passes >= res.budgets[next].budget) {
+                    BudgetStats& b = res.budgets[next++];
+                    b.passes += double(passes) / seeds;
+                    double samples = 0.0;
+                    for (size_t i = 0; i < want.size(); ++i) {
+                        b.errors.push_back(film.mean(shader::kChannelEstimate, i).x / want[i] - 1.0);
+                        samples += film.samplesOf(i) / want.size();
+                    }
+                    b.samples += samples / seeds;
+                }
+            }
+            res.seconds += renderer.stats().wallSeconds;
+            res.passes += renderer.stats().photonPasses;
+            res.samples += renderer.stats().samplesPerPixel;
         }
     }
-    // Slopes over 16..256 passes (the first points are dominated by the start-up radius).
-    std::vector<double> x, ym, yd, t, ymt;
-    for (size_t i = 0; i < res.passes.size(); ++i)
-        if (res.passes[i] >= 16) {
-            x.push_back(double(res.passes[i]));
-            ym.push_back(res.meanMse[i]);
-            yd.push_back(res.medianMse[i]);
-            t.push_back(res.seconds[i]);
-        }
-    res.slopeMean = logLogSlope(x, ym);
-    res.slopeMedian = logLogSlope(x, yd);
-    res.slopeTime = logLogSlope(t, ym);
-    state.counters["mse_slope_mean"] = res.slopeMean;
-    state.counters["mse_slope_median"] = res.slopeMedian;
-    state.counters["mse_slope_time"] = res.slopeTime;
-    gConvergence.push_back(res);
+    std::vector<double> x, med, mabs, mse;
+    for (const BudgetStats& b : res.budgets) {
+        if (b.budget < 64) continue;  // slopes over 2^6 .. 2^14 passes
+        std::vector<double> a;
+        double m = 0.0, q = 0.0;
+        for (double e : b.errors) a.push_back(std::abs(e)), m += std::abs(e) / b.errors.size(), q += e * e / b.errors.size();
+        std::nth_element(a.begin(), a.begin() + a.size() / 2, a.end());
+        x.push_back(b.passes);
+        med.push_back(a[a.size() / 2]);
+        mabs.push_back(m);
+        mse.push_back(q);
+    }
+    res.slopeMedian = logLogSlope(x, med);
+    res.slopeMeanAbs = logLogSlope(x, mabs);
+    res.slopeMse = logLogSlope(x, mse);
+    state.counters["slope_median_abs"] = res.slopeMedian;
+    state.counters["slope_mean_abs"] = res.slopeMeanAbs;
+    state.counters["slope_mse"] = res.slopeMse;
+    gBudget.push_back(std::move(res));
 }
 
-const char* kPpm = R"({"type":"progressive_photon_map","photon_count":20000,"gather_radius":0.25,"direct_lighting":"photons"})";
-const char* kUnbiased = R"({"type":"photon_map","photon_count":20000,"gather_radius":0.25,"direct_lighting":"photons",
+const char* kPpm = R"({"type":"progressive_photon_map","photon_count":10000,"gather_radius":0.25,"direct_lighting":"photons"})";
+const char* kUnbiased = R"({"type":"photon_map","photon_count":10000,"gather_radius":0.25,"direct_lighting":"photons",
     "debias":{"estimator":"single_term"}})";
-const char* kUnbiasedProgressive = R"({"type":"progressive_photon_map","photon_count":20000,"gather_radius":0.25,
-    "direct_lighting":"photons","debias":{"estimator":"single_term"}})";
+const char* kUnbiasedPerPixel = R"({"type":"photon_map","photon_count":10000,"gather_radius":0.25,"direct_lighting":"photons",
+    "debias":{"estimator":"single_term","level_schedule":"per_pixel"}})";
 
 }  // namespace
 
 BENCHMARK(photonPass)->Arg(1 << 20)->Arg(1 << 21)->Arg(1 << 22)->Arg(1 << 23)->Arg(1 << 24)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(convergence, ppm, std::string("progressive photon mapping"), std::string(kPpm))->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
-BENCHMARK_CAPTURE(convergence, unbiased, std::string("unbiased photon mapping"), std::string(kUnbiased))->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
-BENCHMARK_CAPTURE(convergence, unbiased_progressive, std::string("unbiased progressive photon mapping"), std::string(kUnbiasedProgressive))->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+BENCHMARK_CAPTURE(budgetConvergence, ppm, std::string("progressive photon mapping"), std::string(kPpm), 8u, false)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+BENCHMARK_CAPTURE(budgetConvergence, unbiased, std::string("unbiased photon mapping (uniform)"), std::string(kUnbiased), 8u, true)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+BENCHMARK_CAPTURE(budgetConvergence, unbiased_per_pixel, std::string("unbiased photon mapping (per_pixel)"), std::string(kUnbiasedPerPixel), 8u, false)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 
 // ---- Markdown tables (from the rows the benchmarks recorded) ----
 namespace {
@@ -196,15 +219,49 @@ std::string tables(const bench::Runs&) {
                                r.at("bytes_per_photon"));
         out += "\n";
     }
-    if (!gConvergence.empty()) {
-        out += "| method | passes | mean MSE (8 seeds) | median MSE | seconds |\n|---|---|---|---|---|\n";
-        for (const auto& c : gConvergence)
-            for (size_t i = 0; i < c.passes.size(); ++i)
-                out += fmt::format("| {} | {} | {:.3e} | {:.3e} | {:.2f} |\n", c.label, c.passes[i], c.meanMse[i],
-                                   c.medianMse[i], c.seconds[i]);
-        out += "\n| method | MSE slope vs passes (mean) | (median) | MSE slope vs time (mean) |\n|---|---|---|---|\n";
-        for (const auto& c : gConvergence)
-            out += fmt::format("| {} | {:.2f} | {:.2f} | {:.2f} |\n", c.label, c.slopeMean, c.slopeMedian, c.slopeTime);
+    if (!gBudget.empty()) {
+        out += fmt::format("Point light over a plane, {}x{} pixels, {} photon paths per pass, r_1 = r_b = {:g}, {} seeds; "
+                           "relative errors e per pixel, over pixels and seeds.\n\n",
+                           kRes, kRes, kPhotons, kRadius, 8);
+        out += "| method | budget (passes) | passes run | samples per pixel | median abs error | mean abs error | "
+               "mean squared error (outlier-dominated) | mean signed error |\n|---|---|---|---|---|---|---|---|\n";
+        std::string csv = "method,budget,passes,samples,median_abs,mean_abs,mse,mean\n";
+        for (const auto& m : gBudget)
+            for (const auto& b : m.budgets) {
+                std::vector<double> a;
+                double mean = 0.0, mabs = 0.0, mse = 0.0;
+                for (double e : b.errors) {
+                    a.push_back(std::abs(e));
+                    mean += e / b.errors.size();
+                    mabs += std::abs(e) / b.errors.size();
+                    mse += e * e / b.errors.size();
+                }
+                std::nth_element(a.begin(), a.begin() + a.size() / 2, a.end());
+                out += fmt::format("| {} | {} | {:.0f} | {:.1f} | {:.4f} | {:.4f} | {:.3e} | {:+.4f} |\n", m.label, b.budget,
+                                   b.passes, b.samples, a[a.size() / 2], mabs, mse, mean);
+                csv += fmt::format("{},{},{:.1f},{:.2f},{:.6g},{:.6g},{:.6g},{:.6g}\n", m.label, b.budget, b.passes,
+                                   b.samples, a[a.size() / 2], mabs, mse, mean);
+            }
+        out += "\n| method | slope of median abs error | slope of mean abs error | slope of MSE | photon passes per sample "
+               "| seconds (all seeds) |\n|---|---|---|---|---|---|\n";
+        for (const auto& m : gBudget)
+            out += fmt::format("| {} | {:.3f} | {:.3f} | {:.3f} | {:.2f} | {:.0f} |\n", m.label, m.slopeMedian,
+                               m.slopeMeanAbs, m.slopeMse, double(m.passes) / double(std::max<uint64_t>(m.samples, 1)),
+                               m.seconds);
+        out += "\nSlopes: least squares of log error against log passes over budgets 2^6 .. 2^14.\n";
+        for (const auto& m : gBudget) {
+            if (m.tail.empty()) continue;
+            out += fmt::format("\nTail of the block samples of the centre 4x4 pixels ({}: {} samples): z P(|Z - L| > z L)\n\n"
+                               "| z | 0.3 | 1 | 3 | 10 | 30 | 100 | 300 |\n|---|---|---|---|---|---|---|---|\n| z P |",
+                               m.label, m.tail.size());
+            for (double z : {0.3, 1.0, 3.0, 10.0, 30.0, 100.0, 300.0}) {
+                double count = 0.0;
+                for (double t : m.tail) count += t > z;
+                out += fmt::format(" {:.4f} |", z * count / double(m.tail.size()));
+            }
+            out += "\n";
+        }
+        std::ofstream(std::string(TELESCOPE_SOURCE_DIR) + "/docs/bench/photon-blocks.csv") << csv;
     }
     return out;
 }

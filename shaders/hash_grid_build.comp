@@ -2,8 +2,11 @@
 // clear the per-bucket counts, count photons per bucket, exclusive prefix sum of the counts
 // (1024-element blocks, block totals scanned recursively, then added back), and scatter copies of
 // the photons into bucket order (so that a gather reads each bucket contiguously). After the scatter cellStart[h] holds the END of bucket h's range,
-// which starts at cellStart[h] - cellCount[h]. The query stage evaluates gatherPhotons() at
-// given points (tests). Loops are grid-stride: the host dispatches for the capacity.
+// which starts at cellStart[h] - cellCount[h]; the scan of the counts also records the fullest
+// bucket (PhotonMapHeader::maxBucket), from which the host sizes the gather's slices. The query
+// stage evaluates one slice of gatherPhotons() at given points (tests).
+// Loops are grid-stride over at most 4096 x 256 threads, so a thread runs at most 2^31 / 2^20 =
+// 2048 iterations (lavapipe stops the loops of an invocation after 65535 iterations in all).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_buffer_reference : require
@@ -25,6 +28,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4ArrayRe
 #include "photon_gather.glsl"
 
 shared uint threadTotals[kGridGroupSize];
+shared uint threadMax[kGridGroupSize];
 
 uint threadCount() { return gl_NumWorkGroups.x * kGridGroupSize; }
 
@@ -42,6 +46,7 @@ void scanBlock() {
         total += v[k];
     }
     threadTotals[t] = total;
+    threadMax[t] = max(max(v[0], v[1]), max(v[2], v[3]));
     barrier();
     for (uint offset = 1u; offset < kGridGroupSize; offset <<= 1u) {
         uint add = t >= offset ? threadTotals[t - offset] : 0u;
@@ -56,6 +61,14 @@ void scanBlock() {
     }
     if (t == kGridGroupSize - 1u && (pc.sumsLo != 0u || pc.sumsHi != 0u))
         UintArrayRef(uvec2(pc.sumsLo, pc.sumsHi)).v[gl_WorkGroupID.x] = threadTotals[t];
+
+    // ---- The fullest bucket: a tree reduction, one atomic per workgroup ----
+    if (pc.recordMax == 0u) return;
+    for (uint width = kGridGroupSize / 2u; width > 0u; width >>= 1u) {
+        if (t < width) threadMax[t] = max(threadMax[t], threadMax[t + width]);
+        barrier();
+    }
+    if (t == 0u) atomicMax(PhotonMapRef(uvec2(pc.headerLo, pc.headerHi)).h.maxBucket, threadMax[0]);
 }
 
 void main() {
@@ -87,13 +100,15 @@ void main() {
             sorted.p[atomicAdd(cellStart.v[ph.cell], 1u)] = ph;
         }
     } else if (kStage == kGridStageQuery) {
-        // Query i: src.v[2i] = (x, -), src.v[2i+1] = (n, -); out: (base.x, difference.x, found, 0)
+        // Query i: src.v[2i] = (x, -), src.v[2i+1] = (n, -); out: (base.x, difference.x, found, 0),
+        // added up over the slices (one query per thread: the host dispatches enough threads).
         Vec4ArrayRef src = Vec4ArrayRef(uvec2(pc.srcLo, pc.srcHi));
         Vec4ArrayRef dst = Vec4ArrayRef(uvec2(pc.dstLo, pc.dstHi));
-        for (uint i = id; i < pc.count; i += threadCount()) {
-            GatherSums s = gatherPhotons(map, src.v[2u * i].xyz, src.v[2u * i + 1u].xyz, pc.radius * pc.radius, true,
-                                         pc.logRadius2, pc.logStep2, kKernel);
-            dst.v[i] = vec4(s.base.x, s.difference.x, float(s.found), 0.0);
+        if (id < pc.count) {
+            GatherSums s = gatherPhotons(map, src.v[2u * id].xyz, src.v[2u * id + 1u].xyz, pc.radius * pc.radius, true,
+                                         pc.logRadius2, pc.logStep2, kKernel, pc.sliceBegin);
+            vec4 sums = vec4(s.base.x, s.difference.x, float(s.found), 0.0);
+            dst.v[id] = pc.sliceBegin == 0u ? sums : dst.v[id] + sums;
         }
     }
 }

@@ -1,18 +1,24 @@
 // The photon-map lookup (GLSL only; after the PhotonMapRef declarations): ONE traversal of the
 // 2x2x2 cells around x accumulates, from the same photons, the kernel sum at r_b and the
-// closed-form difference K_{r_{j+1}} - K_{r_j} (shared/photon_density.h). Photons arriving from
-// behind the surface (dot(w_i, n) <= 0) are rejected.
+// closed-form difference K_{r'} - K_r (shared/photon_density.h). Photons arriving from behind
+// the surface (dot(w_i, n) <= 0) are rejected.
+//
+// Lavapipe ends the loops of a shader invocation after 65535 iterations in all, without a word,
+// and a bucket may hold millions of photons. One call therefore reads photons sliceBegin ..
+// sliceBegin + kGatherSlicePhotons - 1 of each bucket (at most 8 x 4096 iterations); the caller
+// runs as many slices (dispatches) as the fullest bucket needs (PhotonMapHeader::maxBucket) and
+// adds their sums.
 
 struct GatherSums {
     vec3 base;        // sum Phi_i W_{r_b}
-    vec3 difference;  // sum Phi_i (W_{r_{j+1}} - W_{r_j})
+    vec3 difference;  // sum Phi_i (W_{r'} - W_r)
     uint found;       // photons within r_b on the front side
 };
 
-// rb2 = r_b^2; logRadius2 = ln(r_j^2 / r_b^2), logStep2 = ln(r_{j+1}^2 / r_j^2); no difference
-// when difference is false.
+// rb2 = r_b^2; logRadius2 = ln(r^2 / r_b^2), logStep2 = ln(r'^2 / r^2); no difference when
+// difference is false.
 GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool difference, float logRadius2,
-                         float logStep2, uint kernel) {
+                         float logStep2, uint kernel, uint sliceBegin) {
     GatherSums s;
     s.base = vec3(0.0);
     s.difference = vec3(0.0);
@@ -33,8 +39,12 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
         for (uint k = 0u; k < c; ++k) seen = seen || visited[k] == h;
         visited[c] = h;
         if (seen) continue;
+        uint count = cellCount.v[h];
+        if (sliceBegin >= count) continue;
         uint end = cellStart.v[h];  // the scatter left the end of the bucket's range here
-        for (uint i = end - cellCount.v[h]; i < end; ++i) {
+        uint first = end - count + sliceBegin;
+        uint last = first + min(count - sliceBegin, kGatherSlicePhotons);
+        for (uint i = first; i < last; ++i) {
             Photon ph = sorted.p[i];
             vec3 d = x - ph.position;
             float d2 = dot(d, d);

@@ -48,7 +48,9 @@ void main() {
     uint path = gl_GlobalInvocationID.y * pc.rowThreads + gl_GlobalInvocationID.x;
     if (path >= pc.pathCount || kLightCount == 0u) return;
     PhotonMapRef map = PhotonMapRef(uvec2(pc.headerLo, pc.headerHi));
-    Rng rng = rngCreate(path, pc.pass, pc.seed ^ 0x5bd1e995u);
+    uint seed = pc.seed ^ 0x5bd1e995u;
+    if (pc.passInBlock != 0u) seed ^= pcgHash(pc.passInBlock);  // the passes of a block differ
+    Rng rng = rngCreate(path, pc.pass, seed);
 
     vec3 origin, dir, power;
     emitPhoton(rng, origin, dir, power);

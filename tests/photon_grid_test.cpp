@@ -67,8 +67,9 @@ void compareWithBruteForce(uint32_t photonCount, float size, float radius, uint3
         else xs[i] = (glm::vec3(rngNext(rng), rngNext(rng), rngNext(rng)) - 0.5f) * size;
         ns[i] = direction(rng);
     }
-    const LevelPmf pmf{kPmfPowerLaw, 0.0f, 2.0f / 3.0f};
-    const float logRadius2 = levelLogRadius2(pmf, 3.0f, 1.0f), logStep2 = levelLogStep2(pmf, 3.0f);
+    // Level 3 of the default blocks: r_3^2 = r_b^2 s^3, r_4^2 = r_3^2 s with s = 1/sqrt(2).
+    const PhotonLevels levels{0.7f, std::log(0.70710678f), 3u, 20u};
+    const float logRadius2 = photonLevelLogRadius2(levels, 3), logStep2 = levels.logAreaRatio;
 
     PhotonMap map(sharedContext(), photonCount);
     map.uploadPhotons(photons, 2.0f * radius);
@@ -79,7 +80,10 @@ void compareWithBruteForce(uint32_t photonCount, float size, float radius, uint3
         Sums want = bruteForce(photons, xs[i], ns[i], radius, logRadius2, logStep2, kernel);
         nonEmpty += want.found > 0;
         const double tol = 1e-4 * want.magnitude + 1e-30;
-        ASSERT_EQ(uint32_t(got[i].z), want.found) << "query " << i << " radius " << radius;
+        // Photons within an ulp of the radius may fall either way (fused multiply-adds on the
+        // device): up to 1 in 10^5 of the count, at kernel weights near zero.
+        ASSERT_LE(std::abs(double(got[i].z) - double(want.found)), double(want.found / 100000))
+            << "query " << i << " radius " << radius << ": " << got[i].z << " photons, brute force " << want.found;
         ASSERT_NEAR(got[i].x, want.base, tol) << "query " << i << " radius " << radius;
         ASSERT_NEAR(got[i].y, want.difference, tol) << "query " << i << " radius " << radius;
     }
@@ -107,4 +111,14 @@ TEST_F(PhotonGrid, MatchesBruteForceForEveryKernel) {
 TEST_F(PhotonGrid, ThreeScanLevels) {
     // 2.5 M photons: a table of 2^21 buckets, scanned in three levels (2^21, 2048, 2).
     compareWithBruteForce(2500000, 4.0f, 0.02f, kKernelCone, 64, 23);
+}
+
+TEST_F(PhotonGrid, CrowdedCellsMatchBruteForce) {
+    // Lavapipe ends a loop silently after 65535 iterations per SIMD group, so a gather whose
+    // cells hold more photons than that lost the rest (biased photon mapping at r = 0.5 with 10^6
+    // photons per pass gave a third of the answer). The tests above never put more than 20000
+    // photons in one cell. Here 10^6 photons fill the 2x2x2 cells around every query (over 10^5
+    // per cell), and the counts and sums must equal the brute-force gather.
+    compareWithBruteForce(1000000, 1.0f, 1.0f, kKernelCone, 32, 29);
+    compareWithBruteForce(300000, 1.0f, 0.5f, kKernelEpanechnikov, 32, 31);
 }

@@ -20,6 +20,7 @@
 
 #include "region_stats.h"
 #include "render_harness.h"
+#include "shared/photon_density.h"
 
 using namespace telescope;
 using namespace telescope::test;
@@ -54,67 +55,83 @@ Scene plane(const std::string& integrator) {
     return loadTestScene(kScene, {{"camera.resolution", fmt::format("[{},{}]", kRes, kRes)}, {"integrator", integrator}});
 }
 
+// Batch means of one render: per batch and region, the means of the base and of the correction
+// (the estimate is their sum). Batches are consecutive samples of one render (independent: each
+// sample draws its photons, pixel samples and level from its own index).
+struct Batches {
+    std::vector<std::vector<double>> base, correction;  // [region][batch]
+    uint64_t passes = 0, samples = 0;
+};
+
+Batches renderBatches(const Scene& scene, uint32_t batches, uint32_t samplesPerBatch, uint32_t seed) {
+    const size_t regions = (kRes / kBlock) * (kRes / kBlock);
+    Batches out;
+    out.base.resize(regions);
+    out.correction.resize(regions);
+    Renderer renderer(sharedContext(), scene, seed);
+    std::vector<double> baseBefore(regions, 0.0), corrBefore(regions, 0.0);
+    for (uint32_t b = 0; b < batches; ++b) {
+        RenderRequest request;
+        request.spp = samplesPerBatch;
+        renderer.render(request);
+        Film film = renderer.film();
+        const double n = double(film.samplesPerPixel());
+        auto base = blockMeans(film, kBlock, shader::kChannelBase);
+        auto corr = blockMeans(film, kBlock, shader::kChannelCorrection);
+        for (size_t r = 0; r < regions; ++r) {
+            const double bs = base[r].mean.x * n, cs = corr[r].mean.x * n;
+            out.base[r].push_back((bs - baseBefore[r]) / samplesPerBatch);
+            out.correction[r].push_back((cs - corrBefore[r]) / samplesPerBatch);
+            baseBefore[r] = bs;
+            corrBefore[r] = cs;
+        }
+    }
+    out.passes = renderer.stats().photonPasses;
+    out.samples = renderer.stats().samplesPerPixel;
+    return out;
+}
+
 struct BatchTest {
     size_t tFailures = 0, signFailures = 0, regions = 0;
+    double worstT = 0.0;
     std::string worst;
 };
 
-// B batches of `passes` passes each; per region a t-test on the batch means and a sign test.
-// Passes are independent (each draws its photons and pixel samples from its own index), so the
-// batches are consecutive passes of one render.
-BatchTest batchMeansTest(const Scene& scene, uint32_t batches, uint32_t passes, uint32_t seed) {
+// Per region, the batch means of base + weight x correction against the analytic answer: a t-test
+// (Student quantile with B - 1 degrees of freedom) and a sign test (the count of batch means above
+// the answer is Binomial(B, 1/2) when the batch means are centred on it), each Sidak-corrected
+// over the regions at family-wise rate kAlpha: a test's false-alarm rate is at most 2 kAlpha.
+// weight = 1 is the estimator; weight = 0 drops the correction; 1 / 1.1 is p(k) mis-weighted by
+// 10% (the same samples, so the controls run at the same sample count).
+BatchTest batchMeansTest(const Batches& batches, double weight, const char* label) {
     const std::vector<double> want = analyticRegions();
-    std::vector<std::vector<double>> means(want.size());
-    Renderer renderer(sharedContext(), scene, seed);
-    std::vector<double> before(want.size(), 0.0);
-    for (uint32_t b = 0; b < batches; ++b) {
-        RenderRequest request;
-        request.spp = passes;
-        renderer.render(request);
-        Film film = renderer.film();
-        auto regions = blockMeans(film, kBlock);
-        for (size_t r = 0; r < want.size(); ++r) {
-            const double sum = regions[r].mean.x * double(film.samplesPerPixel());
-            means[r].push_back((sum - before[r]) / passes);
-            before[r] = sum;
-        }
-    }
+    const uint32_t n = uint32_t(batches.base[0].size());
+    const double tLimit = sidakStudentThreshold(kAlpha, want.size(), n - 1.0);
+    const SignTestBounds sign = sidakSignTest(kAlpha, want.size(), n);
     BatchTest t;
     t.regions = want.size();
-    const double z = sidakThreshold(kAlpha, want.size());
-    // Sign test: reject when the count above is outside [k, B - k], P(X < k) <= alpha' / 2.
-    const double alphaOne = 1.0 - std::pow(1.0 - kAlpha, 1.0 / double(want.size()));
-    uint32_t k = 0;
-    double cdf = std::pow(0.5, batches), term = cdf;
-    while (cdf + term * double(batches - k) / double(k + 1) <= alphaOne / 2) {
-        term *= double(batches - k) / double(k + 1);
-        ++k;
-        cdf += term;
-    }
-    ++k;  // smallest accepted count
-    double worst = -1.0;
     for (size_t r = 0; r < want.size(); ++r) {
         double mean = 0.0, var = 0.0;
         uint32_t above = 0;
-        for (double m : means[r]) {
-            mean += m / batches;
-            above += m > want[r];
+        std::vector<double> m(n);
+        for (uint32_t b = 0; b < n; ++b) {
+            m[b] = batches.base[r][b] + weight * batches.correction[r][b];
+            mean += m[b] / n;
+            above += m[b] > want[r];
         }
-        for (double m : means[r]) var += (m - mean) * (m - mean) / (batches - 1);
-        double tStat = (mean - want[r]) / std::sqrt(var / batches);
-        bool tFail = !(std::abs(tStat) <= z);
-        bool signFail = above < k || above > batches - k;
-        t.tFailures += tFail;
-        t.signFailures += signFail;
-        if (std::abs(tStat) > worst) {
-            worst = std::abs(tStat);
-            std::ostringstream s;
-            s << "region " << r << ": mean " << mean << " vs " << want[r] << ", t = " << tStat << ", " << above << "/"
-              << batches << " batches above (accepted " << k << ".." << batches - k << ")";
-            t.worst = s.str();
+        for (double x : m) var += (x - mean) * (x - mean) / (n - 1);
+        const double tStat = (mean - want[r]) / std::sqrt(var / n);
+        t.tFailures += !(std::abs(tStat) <= tLimit);
+        t.signFailures += above < sign.k || above > n - sign.k;
+        if (std::abs(tStat) > t.worstT) {
+            t.worstT = std::abs(tStat);
+            t.worst = fmt::format("region {}: mean {:.5f} vs {:.5f} ({:+.2f}%), t = {:.2f} (limit {:.2f}), {}/{} above "
+                                  "(accepted {}..{})",
+                                  r, mean, want[r], 100.0 * (mean / want[r] - 1.0), tStat, tLimit, above, n, sign.k,
+                                  n - sign.k);
         }
     }
-    std::printf("batch means: %zu/%zu regions fail the t-test, %zu the sign test; worst %s\n", t.tFailures, t.regions,
+    std::printf("%s: %zu/%zu regions fail the t-test, %zu the sign test; worst %s\n", label, t.tFailures, t.regions,
                 t.signFailures, t.worst.c_str());
     return t;
 }
@@ -124,42 +141,58 @@ protected:
     void TearDown() override { expectNoValidationMessages(); }
 };
 
+// A large base radius: the base's bias (-2.6% in the centre regions) makes the control visible.
 const char* kUnbiased =
-    R"({"type":"photon_map","photon_count":20000,"gather_radius":0.1,"direct_lighting":"photons",
+    R"({"type":"photon_map","photon_count":20000,"gather_radius":0.5,"direct_lighting":"photons",
         "debias":{"estimator":"single_term"}})";
+
+void expectUnbiasedWithRejectedControls(const Scene& scene, uint32_t batches, uint32_t perBatch, uint32_t seed) {
+    const Batches b = renderBatches(scene, batches, perBatch, seed);
+    std::printf("%llu photon passes for %llu samples: %.2f per sample\n", (unsigned long long)b.passes,
+                (unsigned long long)b.samples, double(b.passes) / double(b.samples));
+    const BatchTest estimator = batchMeansTest(b, 1.0, "estimator");
+    EXPECT_EQ(estimator.tFailures, 0u) << estimator.worst;
+    EXPECT_EQ(estimator.signFailures, 0u) << estimator.worst;
+    const BatchTest dropped = batchMeansTest(b, 0.0, "control, correction dropped");
+    EXPECT_GT(dropped.tFailures + dropped.signFailures, 0u) << "the control must fail: " << dropped.worst;
+    // p(k) mis-weighted by 10% shifts the mean by a tenth of the base bias (0.3% here): printed for
+    // the record, below what 256 samples resolve (docs/TESTING.md; bench/photon_bench measures it).
+    batchMeansTest(b, 1.0 / 1.1, "(not asserted) p(k) 10% too large");
+}
 
 }  // namespace
 
-TEST_F(PhotonRender, UnbiasedMatchesTheAnalyticPlane) {
-    BatchTest t = batchMeansTest(plane(kUnbiased), 32, 4, 100);
-    EXPECT_EQ(t.tFailures, 0u) << t.worst;
-    EXPECT_EQ(t.signFailures, 0u) << t.worst;
+TEST_F(PhotonRender, UnbiasedBlocksMatchTheAnalyticPlaneAndControlsFail) {
+    expectUnbiasedWithRejectedControls(plane(kUnbiased), 32, 8, 100);
 }
 
-TEST_F(PhotonRender, UnbiasedProgressiveMatchesTheAnalyticPlane) {
-    BatchTest t = batchMeansTest(
-        plane(R"({"type":"progressive_photon_map","photon_count":20000,"gather_radius":0.1,"direct_lighting":"photons",
+TEST_F(PhotonRender, UnbiasedProgressiveBlocksMatchTheAnalyticPlaneAndControlsFail) {
+    expectUnbiasedWithRejectedControls(
+        plane(R"({"type":"progressive_photon_map","photon_count":20000,"gather_radius":1.0,"direct_lighting":"photons",
                   "debias":{"estimator":"single_term"}})"),
         32, 4, 200);
-    EXPECT_EQ(t.tFailures, 0u) << t.worst;
-    EXPECT_EQ(t.signFailures, 0u) << t.worst;
 }
 
-TEST_F(PhotonRender, UnbiasedGeometricLevelsAndOtherKernelsMatchTheAnalyticPlane) {
+TEST_F(PhotonRender, OtherKernelsAndBlockSettingsMatchTheAnalyticPlane) {
     for (const char* kernel : {"epanechnikov", "uniform"}) {
-        BatchTest t = batchMeansTest(
-            plane(fmt::format(R"({{"type":"photon_map","photon_count":20000,"gather_radius":0.1,"direct_lighting":"photons",
-                              "kernel":"{}","debias":{{"estimator":"single_term","pmf":{{"type":"geometric","r":0.5}}}}}})",
+        const Batches b = renderBatches(
+            plane(fmt::format(R"({{"type":"photon_map","photon_count":20000,"gather_radius":0.5,"direct_lighting":"photons",
+                              "kernel":"{}","debias":{{"estimator":"single_term","pmf":{{"type":"geometric","r":0.6}},
+                              "area_ratio":0.8,"photon_growth":2}}}})",
                               kernel)),
-            32, 4, 250);
+            32, 8, 250);
+        BatchTest t = batchMeansTest(b, 1.0, kernel);
         EXPECT_EQ(t.tFailures, 0u) << kernel << ": " << t.worst;
         EXPECT_EQ(t.signFailures, 0u) << kernel << ": " << t.worst;
+        BatchTest control = batchMeansTest(b, 0.0, "control, correction dropped");
+        EXPECT_GT(control.tFailures + control.signFailures, 0u) << kernel << ": " << control.worst;
     }
 }
 
 TEST_F(PhotonRender, BiasedLargeRadiusFailsTheSameTest) {
-    BatchTest t = batchMeansTest(
-        plane(R"({"type":"photon_map","photon_count":20000,"gather_radius":0.5,"direct_lighting":"photons"})"), 32, 4, 300);
+    const Batches b = renderBatches(
+        plane(R"({"type":"photon_map","photon_count":20000,"gather_radius":0.5,"direct_lighting":"photons"})"), 32, 8, 300);
+    BatchTest t = batchMeansTest(b, 1.0, "biased");
     EXPECT_GT(t.tFailures, t.regions / 4) << t.worst;
     EXPECT_GT(t.signFailures, 0u) << t.worst;
 }
@@ -196,22 +229,52 @@ TEST_F(PhotonRender, NextEventDirectLightMatchesThePlaneWithoutPhotonsAtTheFirst
     for (size_t r = 0; r < want.size(); ++r) EXPECT_NEAR(regions[r].mean.x, want[r], 0.02 * want[r]) << "region " << r;
 }
 
-TEST_F(PhotonRender, BaseAndCorrectionAddUpAndSplitIntoSignedParts) {
-    Film film = renderFilm(plane(kUnbiased), 4, 500);
-    size_t negative = 0;
+TEST_F(PhotonRender, UnbiasedPixelsGoNegative) {
+    // Signed corrections reach the film unclamped: at a small base radius a few of 8 blocks give
+    // negative pixels.
+    Film film = renderFilm(plane(R"({"type":"photon_map","photon_count":20000,"gather_radius":0.05,
+                                     "direct_lighting":"photons","debias":{"estimator":"single_term"}})"),
+                           8, 500);
+    size_t negative = 0, negativeCorrection = 0;
     for (size_t i = 0; i < film.pixelCount(); ++i) {
-        glm::dvec3 est = film.mean(shader::kChannelEstimate, i);
-        glm::dvec3 base = film.mean(shader::kChannelBase, i), corr = film.mean(shader::kChannelCorrection, i);
-        glm::dvec3 pos = film.mean(shader::kChannelCorrectionPositive, i);
-        glm::dvec3 neg = film.mean(shader::kChannelCorrectionNegative, i);
-        ASSERT_NEAR(base.x + corr.x, est.x, 1e-4 * (1.0 + std::abs(est.x))) << i;
-        ASSERT_NEAR(pos.x + neg.x, corr.x, 1e-4 * (1.0 + std::abs(pos.x) + std::abs(neg.x))) << i;
-        ASSERT_GE(pos.x, 0.0);
-        ASSERT_LE(neg.x, 0.0);
-        negative += est.x < 0.0;
+        negative += film.mean(shader::kChannelEstimate, i).x < 0.0;
+        negativeCorrection += film.mean(shader::kChannelCorrectionNegative, i).x < 0.0;
     }
-    EXPECT_GT(negative, 0u) << "a few pixels of a 4-pass unbiased render are negative";
+    EXPECT_GT(negative, 0u);
+    EXPECT_GT(negativeCorrection, negative);
     EXPECT_EQ(film.nonFiniteSamples(), 0u);
+}
+
+TEST_F(PhotonRender, PerPixelScheduleIsConsistent) {
+    // Each pixel draws its own levels and counts its own completed blocks; unfinished blocks are
+    // dropped. The count per pixel is a renewal process with block lengths 3^k, k ~ p(k): its mean
+    // and variance after 192 passes follow from the pmf (the mean of 256 independent pixels is
+    // checked at 5 standard errors). The regions are within a few percent of the answer.
+    Scene scene = plane(R"({"type":"photon_map","photon_count":20000,"gather_radius":0.5,"direct_lighting":"photons",
+                            "debias":{"estimator":"single_term","level_schedule":"per_pixel"}})");
+    Film film = renderFilm(scene, 192, 550);
+    ASSERT_TRUE(film.perPixelCounts());
+    double counted = 0.0;
+    for (size_t i = 0; i < film.pixelCount(); ++i) counted += film.samplesOf(i);
+    const double perPixel = counted / double(film.pixelCount());
+    // E[N(t)] and E[N(t)^2] of the renewal count, by recursion over t.
+    const shader::PhotonLevels levels{0.7f, float(std::log(std::sqrt(0.5))), 3u, 20u};
+    std::vector<double> m1(193, 0.0), m2(193, 0.0);
+    for (uint32_t t = 1; t <= 192; ++t)
+        for (uint32_t k = 0; k < levels.cap; ++k) {
+            const uint32_t x = shader::photonBlockPasses(levels, k);
+            if (x > t) break;
+            const double p = shader::photonLevelProbability(levels, k);
+            m1[t] += p * (1.0 + m1[t - x]);
+            m2[t] += p * (1.0 + 2.0 * m1[t - x] + m2[t - x]);
+        }
+    const double sd = std::sqrt((m2[192] - m1[192] * m1[192]) / double(film.pixelCount()));
+    EXPECT_NEAR(perPixel, m1[192], 5.0 * sd) << "blocks completed per pixel (192 / 6.15 = 31 if no block were cut)";
+    const std::vector<double> want = analyticRegions();
+    auto regions = blockMeans(film, kBlock);
+    double error = 0.0;
+    for (size_t r = 0; r < want.size(); ++r) error += std::abs(regions[r].mean.x / want[r] - 1.0) / want.size();
+    EXPECT_LT(error, 0.03) << "mean relative error of the regions";
 }
 
 TEST_F(PhotonRender, SixteenMillionPhotons) {

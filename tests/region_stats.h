@@ -38,3 +38,20 @@ ZSummary compareRegions(const std::vector<RegionMean>& a, const std::vector<Regi
 ZSummary compareToValue(const std::vector<RegionMean>& a, glm::dvec3 value, double threshold);
 
 }  // namespace telescope::test
+
+namespace telescope::test {
+
+// Two-sided Student t quantile with `dof` degrees of freedom for a family of `tests` tests at
+// overall false-alarm rate `alpha` (Sidak): |T| above it has probability 1 - (1 - alpha)^(1/tests).
+double sidakStudentThreshold(double alpha, size_t tests, double dof);
+
+// Smallest number k such that a sign test on n batch means (each above the answer with
+// probability 1/2) rejects when fewer than k or more than n - k are above, for a family of
+// `tests` tests at overall false-alarm rate alpha (Sidak). Also returns the rate each test has.
+struct SignTestBounds {
+    uint32_t k = 0;
+    double rate = 0.0;  // exact false-alarm rate of one test: 2 P(Binomial(n, 1/2) < k)
+};
+SignTestBounds sidakSignTest(double alpha, size_t tests, uint32_t n);
+
+}  // namespace telescope::test

@@ -181,7 +181,8 @@ CONST uint kLevelQueueGroupSize = 64u;
 // Accumulation: per pixel and channel a compensated sum (hi, lo) of vec4.
 // index of the hi part = (channel * pixelCount + pixel) * 2, lo = hi + 1.
 CONST uint kChannelEstimate = 0u;    // rgb: sum of Z; w: non-finite samples dropped
-CONST uint kChannelEstimateSq = 1u;  // rgb: sum of Z^2
+CONST uint kChannelEstimateSq = 1u;  // rgb: sum of Z^2; w: samples of this pixel when pixels differ
+                                     // (photon per_pixel schedule), else 0 (every pixel has spp)
 CONST uint kChannelBase = 2u;        // rgb: sum of the base I(k)
 CONST uint kChannelCorrection = 3u;  // rgb: sum of the correction Z - I(k)
 CONST uint kChannelCorrectionPositive = 4u;  // rgb: sum of max(correction, 0)
@@ -201,15 +202,16 @@ SHADER_NAMESPACE_BEGIN
 
 CONST uint kSpecPhotonEstimator = 48u;   // kPhotonBiased or kPhotonUnbiased
 CONST uint kSpecPhotonKernel = 49u;      // kKernelCone, kKernelUniform, kKernelEpanechnikov
-CONST uint kSpecPhotonLevels = 50u;      // kPmfGeometric or kPmfPowerLaw: radius schedule and pmf
-CONST uint kSpecPhotonPmfR = 51u;
-CONST uint kSpecPhotonPmfAlpha = 52u;
+CONST uint kSpecPhotonSchedule = 50u;    // kPhotonSchedule*: how the levels of the blocks are drawn
 CONST uint kSpecPhotonNextEvent = 53u;   // direct light by next-event estimation, not photons
 CONST uint kSpecGridStage = 54u;         // hash_grid_build: which stage this pipeline runs
 CONST uint kSpecPhotonMaxBounces = 55u;  // scattering vertices of a photon path / camera chain
 
 CONST uint kPhotonBiased = 0u;    // K_r at the pass radius (fixed radius, or the PPM schedule)
-CONST uint kPhotonUnbiased = 1u;  // K_{r_b} + (K_{r_{j+1}} - K_{r_j}) / p(j | j >= b)
+CONST uint kPhotonUnbiased = 1u;  // blocks: mean K_{r_b} + mean (K_{r_{k+1}} - K_{r_k}) / p(k)
+
+CONST uint kPhotonScheduleUniform = 0u;   // the host draws one level per block for the whole image
+CONST uint kPhotonSchedulePerPixel = 1u;  // each pixel draws its own level and keeps its own block
 
 CONST uint kGridStageClear = 0u;    // cellCount = 0
 CONST uint kGridStageCount = 1u;    // photon -> cell hash, cellCount[h]++
@@ -222,6 +224,12 @@ CONST uint kPhotonTraceGroupSize = 64u;
 CONST uint kGridGroupSize = 256u;
 CONST uint kScanBlock = 1024u;      // elements per scan workgroup (4 per thread)
 CONST uint kGatherGroupSize = 8u;   // 8x8 pixel tiles
+// Lavapipe ends the loops of a shader invocation after 65535 iterations in all (one counter per
+// SIMD group for every loop of the shader, without a word). A gather therefore reads at most
+// kGatherSlicePhotons photons of each of its 8 buckets per dispatch: a pass whose fullest bucket
+// holds more runs the gather in several slices (dispatches), each adding its part of the sums.
+CONST uint kGatherSlicePhotons = 4096u;
+CONST uint kGatherBlockVec4s = 6u;  // per-pixel block buffer of the gather (gather.comp)
 
 // A stored photon: where it landed, where it came from (octahedral, 2 x snorm16) and its power
 // (flux per emitted path of the pass). cell is the hash bucket, written by the count stage.
@@ -233,10 +241,12 @@ struct Photon {
 // The photon map of one pass, in device memory, reached by address. photon_trace counts every
 // photon it stores in storedCount, also those beyond capacity (which it drops): the host then
 // grows the buffers and repeats the pass, so no photon is ever lost.
+// maxBucket: the photons of the fullest bucket (written by the scan), which sets the gather's slices.
 struct PhotonMapHeader {
     uint storedCount; uint capacity; uint tableSize; float cellSize;
     uint photonsLo; uint photonsHi; uint sortedLo; uint sortedHi;  // photons as stored, and in bucket order
     uint cellCountLo; uint cellCountHi; uint cellStartLo; uint cellStartHi;
+    uint maxBucket; uint pad0; uint pad1; uint pad2;
 };
 
 struct PhotonTracePush {
@@ -246,7 +256,7 @@ struct PhotonTracePush {
     uint seed;
     float pathScale;  // 1 / pathCount
     uint rowThreads;  // threads per row of the 2D dispatch: path = y * rowThreads + x
-    uint pad0;
+    uint passInBlock; // pass within the block (unbiased photon mapping), else 0
 };
 
 struct HashGridPush {
@@ -258,28 +268,41 @@ struct HashGridPush {
     float radius;              // query: r_b
     float logRadius2;          // query: ln(r_j^2 / r_b^2)
     float logStep2;            // query: ln(r_{j+1}^2 / r_j^2)
+    uint sliceBegin;           // query: first photon of each bucket this dispatch reads
+    uint recordMax;            // scan: 1 when the input is the bucket counts (sets maxBucket)
+    uint pad0; uint pad1;
 };
 
+// One gather dispatch: slice `slice` of `sliceCount` of a photon pass. Unbiased photon mapping:
+// `pass` is the block index (uniform schedule) or the pass index (per_pixel), `passInBlock` the
+// pass within the block; level is the uniform schedule's (per_pixel draws its own from the pmf
+// below).
 struct GatherPush {
     vec3 cameraPosition; float planeDistance;
     vec3 cameraRight; uint width;
     vec3 cameraUp; uint height;
     vec3 cameraForward; uint seed;
-    uint pass;          // sample index
+    uint pass;          // pass index (biased, progressive), block or pass index (unbiased)
     uint accumLo; uint accumHi;
     uint headerLo; uint headerHi;
     float radius;       // r_b: the base (largest) radius of this pass
-    float baseLevel;    // b: the level of r_b (unbiased), 1 + pass for the progressive variant
-    uint pad0;
+    uint blockLo; uint blockHi;  // per-pixel block sums (unbiased) and the slices' partial sums
+    uint slice; uint sliceCount;
+    uint level;         // uniform schedule: the block's level k (of photonBlockPasses() passes)
+    uint passInBlock;
+    float pmfR;         // p(k) = r (1 - r)^k / (1 - (1 - r)^K), k < K
+    float logAreaRatio; // ln s: r_k^2 = r_b^2 s^k
+    uint photonGrowth;  // m: a level-k block has m^k passes
+    uint levelCap;      // K
 };
 
 SHADER_NAMESPACE_END
 #ifdef __cplusplus
 static_assert(sizeof(telescope::shader::Photon) == 32);
-static_assert(sizeof(telescope::shader::PhotonMapHeader) == 48);
+static_assert(sizeof(telescope::shader::PhotonMapHeader) == 64);
 static_assert(sizeof(telescope::shader::PhotonTracePush) == 32);
-static_assert(sizeof(telescope::shader::HashGridPush) == 48);
-static_assert(sizeof(telescope::shader::GatherPush) == 96);
+static_assert(sizeof(telescope::shader::HashGridPush) == 64);
+static_assert(sizeof(telescope::shader::GatherPush) == 128);
 #endif
 
 #endif

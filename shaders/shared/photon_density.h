@@ -5,19 +5,9 @@
 //   K_r(x)  = sum_i f Phi_i W_r(|x - x_i|),        W_r(d) = shape(d / r) / (pi r^2), d < r
 //   cone: shape(t) = 3 (1 - t)   uniform: 1   Epanechnikov: 2 (1 - t^2)   (each integrates to 1)
 //
-// Levels j >= b (b = 1, or the pass index + 1 for the unbiased progressive variant):
-//   power law: r_j^2 = r_1^2 j^(alpha-1),  p(j | j >= b) = (j^(alpha-1) - (j+1)^(alpha-1)) / b^(alpha-1)
-//   geometric: r_j^2 = r_1^2 2^-(j-1),     p(j | j >= b) = r (1-r)^(j-b)
-//   Z = K_{r_b} + (K_{r_{j+1}} - K_{r_j}) / p(j | j >= b)
-// Radii are carried as logarithms relative to r_b, and K_{r_{j+1}} - K_{r_j} is evaluated per
-// photon in closed form, so levels far beyond 2^24 (r_{j+1} and r_j equal in float) keep their
-// exact difference.
-//
-// Truncation (the only one): levels with r_j < 2^-16 r_b are never corrected
-// (kLogRadius2Floor). The estimator is then unbiased for I(2^-16 r_b); the neglected tail is the
-// bias of a kernel estimate with that radius, ~2^-32 of the base bias for smooth radiance. With
-// the power law alpha = 2/3 it is drawn with probability ~2^-32, with the geometric pmf r = 0.65
-// with probability 0.35^32 ~ 3e-15.
+// Unbiased photon mapping draws a level per block of photon passes (see "Block levels" below).
+// Kernel differences K_{r'} - K_r are evaluated per photon in closed form (expm1/log1p), so
+// neighbouring radii that are equal in float keep their exact difference.
 #ifndef TELESCOPE_PHOTON_DENSITY_H
 #define TELESCOPE_PHOTON_DENSITY_H
 
@@ -32,7 +22,6 @@ CONST uint kKernelCone = 0u;
 CONST uint kKernelUniform = 1u;
 CONST uint kKernelEpanechnikov = 2u;
 
-CONST float kLogRadius2Floor = -22.18070978f;  // ln(2^-32): r_j^2 / r_b^2 below this is not corrected
 CONST float kLn2 = 0.69314718056f;
 
 // ---- Accurate log(1 + x) and exp(x) - 1 (series below 1e-2, relative error < 1e-6 above) ----
@@ -73,44 +62,44 @@ FN float kernelDifference(uint kernel, float d2, float r2, float logQ2) {
     return 3.0f * (e2 - t * expm1Precise(-1.5f * logQ2)) / (kPi * r2);
 }
 
-// ---- Levels (the pmf type is the radius schedule: kPmfPowerLaw or kPmfGeometric) ----
+// ---- Block levels (docs/PHOTON-MAPPING.md) ----
+// A sample of unbiased photon mapping is a block of level k = 0 .. K-1: m^k photon passes whose
+// kernels have the base radius r_b and r_k^2 = r_b^2 s^k, r_{k+1}^2 = r_k^2 s. The level has the
+// truncated geometric pmf p(k) = r (1-r)^k / (1 - (1-r)^K) (continue with q = 1 - r):
+//   Z = mean over the block of K_{r_b}  +  mean over the block of (K_{r_{k+1}} - K_{r_k}) / p(k),
+// unbiased for the kernel estimate at r_K (the cap K is the only truncation).
+struct PhotonLevels {
+    float r;             // stopping probability of the geometric pmf
+    float logAreaRatio;  // ln s
+    uint growth;         // m: photon passes grow m-fold per level
+    uint cap;            // K: levels 0 .. K-1
+};
 
-// ln(r_j^2 / r_b^2).
-FN float levelLogRadius2(LevelPmf pmf, float j, float b) {
-    if (pmf.type == kPmfGeometric) return -(j - b) * kLn2;
-    return (pmf.alpha - 1.0f) * log(j / b);
+// p(k).
+FN float photonLevelProbability(PhotonLevels l, uint k) {
+    float lq = log1pPrecise(-l.r);
+    return l.r * exp(float(k) * lq) / -expm1Precise(float(l.cap) * lq);
 }
 
-// ln(r_{j+1}^2 / r_j^2).
-FN float levelLogStep2(LevelPmf pmf, float j) {
-    if (pmf.type == kPmfGeometric) return -kLn2;
-    return (pmf.alpha - 1.0f) * log1pPrecise(1.0f / j);
-}
-
-// p(j | j >= b).
-FN float levelProbabilityFrom(LevelPmf pmf, float j, float b) {
-    if (pmf.type == kPmfGeometric) return pmf.r * exp((j - b) * log1pPrecise(-pmf.r));
-    return -exp((pmf.alpha - 1.0f) * log(j / b)) * expm1Precise((pmf.alpha - 1.0f) * log1pPrecise(1.0f / j));
-}
-
-// Draws j >= b by inverting the tail P(J >= j | J >= b) from 48 random bits (u1, u2 uniform in
-// [0, 1) with 24 bits each), so that the deep tail is resolved. Returns 0 when the level lies
-// beyond the truncation (r_j < 2^-16 r_b): no correction.
-FN float levelSampleFrom(LevelPmf pmf, float b, float u1, float u2) {
+// Inverts the tail P(level >= k) = (q^k - q^K) / (1 - q^K) from 48 random bits (u1, u2 uniform
+// in [0, 1) with 24 bits each): with one float's 24 bits no level beyond ~13 could be drawn.
+FN uint photonLevelSample(PhotonLevels l, float u1, float u2) {
     float v = (1.0f - u1) - u2 * (1.0f / 16777216.0f);  // uniform in (0, 1]
-    float lv = log(v);
-    float j;
-    if (pmf.type == kPmfGeometric) {
-        j = b + floor(lv / log1pPrecise(-pmf.r));
-    } else {
-        // P(J >= n | J >= b) = (n / b)^(alpha-1): n = b v^(1/(alpha-1)), j = floor(n)
-        float logN = log(b) + lv / (pmf.alpha - 1.0f);
-        if (logN > 80.0f) return 0.0f;
-        j = max(floor(exp(logN)), b);
-    }
-    if (levelLogRadius2(pmf, j, b) < kLogRadius2Floor) return 0.0f;
-    return j;
+    float lq = log1pPrecise(-l.r);
+    float qK = exp(float(l.cap) * lq);
+    float k = floor(log(v * (1.0f - qK) + qK) / lq);
+    return uint(clamp(k, 0.0f, float(l.cap - 1u)));
 }
+
+// m^k passes (the settings keep m^(K-1) below 2^31).
+FN uint photonBlockPasses(PhotonLevels l, uint k) {
+    uint n = 1u;
+    for (uint i = 0u; i < k; ++i) n *= l.growth;
+    return n;
+}
+
+// ln(r_k^2 / r_b^2).
+FN float photonLevelLogRadius2(PhotonLevels l, uint k) { return float(k) * l.logAreaRatio; }
 
 // ---- Hash grid ----
 CONST float kGridCellLimit = 1073741824.0f;  // 2^30: cell coordinates are clamped here

@@ -162,6 +162,8 @@ void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Cont
     if (stats.photonPaths > 0) {
         j["photon_paths"] = stats.photonPaths;
         j["photons_stored"] = stats.photonsStored;
+        j["photon_passes"] = stats.photonPasses;
+        if (stats.samplesPerPixel > 0) j["photon_passes_per_sample"] = double(stats.photonPasses) / double(stats.samplesPerPixel);
     }
     j["non_finite_samples"] = film.nonFiniteSamples();
     j["validation_messages"] = context.validationMessageCount();

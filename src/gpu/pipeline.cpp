@@ -160,6 +160,21 @@ CommandBatch::CommandBatch(const Context& context, uint32_t maxDispatches)
     }
 }
 
+void CommandBatch::reserve(uint32_t maxDispatches) {
+    if (maxDispatches <= maxDispatches_) return;
+    if (recording_) throw std::logic_error("CommandBatch::reserve while recording");
+    if (queries_) {
+        VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+        info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+        info.queryCount = maxDispatches + 1;
+        VkQueryPool pool = VK_NULL_HANDLE;
+        VK_CHECK(vkCreateQueryPool(context_.device(), &info, nullptr, &pool));
+        vkDestroyQueryPool(context_.device(), queries_, nullptr);
+        queries_ = pool;
+    }
+    maxDispatches_ = maxDispatches;
+}
+
 CommandBatch::~CommandBatch() {
     if (queries_) vkDestroyQueryPool(context_.device(), queries_, nullptr);
     if (cmd_) vkFreeCommandBuffers(context_.device(), context_.commandPool(), 1, &cmd_);

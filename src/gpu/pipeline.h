@@ -71,6 +71,8 @@ public:
     CommandBatch(const CommandBatch&) = delete;
     CommandBatch& operator=(const CommandBatch&) = delete;
 
+    // Room for at least maxDispatches dispatches per batch (outside begin()/submitAndWait()).
+    void reserve(uint32_t maxDispatches);
     void begin();
     // Records a dispatch of groups.x * groups.y * groups.z workgroups, named for timing.
     void dispatch(const ComputePipeline& pipeline, const void* push, uint32_t pushBytes, uint32_t groupsX,

@@ -8,14 +8,20 @@ Film::Film(uint32_t width, uint32_t height) : width_(width), height_(height) {
     for (auto& s : sums_) s.assign(pixelCount(), glm::dvec4(0.0));
 }
 
+double Film::samplesOf(size_t pixel) const {
+    const double own = sums_[shader::kChannelEstimateSq][pixel].w;
+    return own > 0.0 ? own : perPixelCounts_ ? 0.0 : double(spp_);
+}
+
 glm::dvec3 Film::mean(uint32_t channel, size_t pixel) const {
-    if (spp_ == 0) return glm::dvec3(0.0);
-    return glm::dvec3(sums_[channel][pixel]) / double(spp_);
+    const double n = samplesOf(pixel);
+    if (n == 0.0) return glm::dvec3(0.0);
+    return glm::dvec3(sums_[channel][pixel]) / n;
 }
 
 glm::dvec3 Film::varianceOfMean(size_t pixel) const {
-    if (spp_ < 2) return glm::dvec3(0.0);
-    double n = double(spp_);
+    const double n = samplesOf(pixel);
+    if (n < 2.0) return glm::dvec3(0.0);
     glm::dvec3 s1 = glm::dvec3(sums_[shader::kChannelEstimate][pixel]);
     glm::dvec3 s2 = glm::dvec3(sums_[shader::kChannelEstimateSq][pixel]);
     glm::dvec3 var = (s2 - s1 * s1 / n) / (n - 1.0);

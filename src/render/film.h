@@ -31,6 +31,13 @@ public:
     std::vector<glm::dvec4>& sums(uint32_t channel) { return sums_[channel]; }
     const std::vector<glm::dvec4>& sums(uint32_t channel) const { return sums_[channel]; }
 
+    // Samples of a pixel: spp, or, when pixels complete samples at their own pace (photon mapping's
+    // per_pixel schedule), the count the render kept in w of kChannelEstimateSq.
+    double samplesOf(size_t pixel) const;
+    // Pixels keep their own sample counts (0 samples reads as 0, never as spp).
+    void setPerPixelCounts(bool on) { perPixelCounts_ = on; }
+    bool perPixelCounts() const { return perPixelCounts_; }
+
     glm::dvec3 mean(uint32_t channel, size_t pixel) const;
     // Sample variance of the pixel estimate divided by the sample count: the variance of the mean.
     glm::dvec3 varianceOfMean(size_t pixel) const;
@@ -42,6 +49,7 @@ public:
 private:
     uint32_t width_ = 0, height_ = 0;
     uint64_t spp_ = 0;
+    bool perPixelCounts_ = false;
     std::array<std::vector<glm::dvec4>, shader::kChannelCount> sums_;
 };
 

@@ -160,10 +160,11 @@ public:
     // A CommandBatch holds 64 dispatches x the passes of the integrator (see Renderer).
     uint32_t maxUnitsPerBatch() const override { return levelCount_ ? 12 : 64; }
 
-    void recordUnit(gpu::CommandBatch& batch, uint64_t sampleBase, uint32_t samples) override {
+    uint32_t recordUnit(gpu::CommandBatch& batch, uint64_t sampleBase, uint32_t samples) override {
         push_.sampleBase = uint32_t(sampleBase);
         push_.sampleCount = samples;
         record(batch, push_, false);
+        return samples;
     }
 
     void setPilotLevel(uint32_t level) override {

@@ -88,6 +88,16 @@ uint64_t PhotonMap::storedCount() const {
     return h.storedCount;
 }
 
+uint32_t PhotonMap::maxBucket() const {
+    shader::PhotonMapHeader h{};
+    header_.download(&h, sizeof(h));
+    return h.maxBucket;
+}
+
+uint32_t PhotonMap::slicesFor(uint32_t photonsInBucket) {
+    return std::max<uint32_t>(1, (photonsInBucket + shader::kGatherSlicePhotons - 1) / shader::kGatherSlicePhotons);
+}
+
 shader::HashGridPush PhotonMap::basePush() const {
     shader::HashGridPush p{};
     p.headerLo = lo(header_.address());
@@ -120,6 +130,7 @@ void PhotonMap::recordBuild(gpu::CommandBatch& batch) {
         p.srcLo = lo(src), p.srcHi = hi(src), p.dstLo = lo(dst), p.dstHi = hi(dst);
         p.sumsLo = lo(sums), p.sumsHi = hi(sums);
         p.count = scanLevelCounts_[level];
+        p.recordMax = level == 0 ? 1u : 0u;
         uint32_t blocks = (p.count + kScanBlock - 1) / kScanBlock;
         batch.dispatch(*stages_[kGridStageScan], &p, sizeof(p), blocks, 1, 1, "hash_grid_build");
     }
@@ -172,12 +183,24 @@ std::vector<glm::vec4> PhotonMap::query(const std::vector<glm::vec3>& positions,
     p.radius = radius;
     p.logRadius2 = logRadius2;
     p.logStep2 = logStep2;
-    gpu::CommandBatch batch(context_, 32);
-    batch.begin();
-    recordBuild(batch);
-    batch.dispatch(pipeline, &p, sizeof(p), uint32_t(std::min<uint64_t>((p.count + 255) / 256, kMaxGroups)), 1, 1,
-                   "query");
-    batch.submitAndWait();
+    if (p.count > kMaxGroups * kGridGroupSize) throw std::invalid_argument("too many photon map queries");
+    const uint32_t groups = std::max<uint32_t>(1, (p.count + kGridGroupSize - 1) / kGridGroupSize);
+    {
+        gpu::CommandBatch batch(context_, 32);
+        batch.begin();
+        recordBuild(batch);
+        batch.submitAndWait();
+    }
+    // As many slices as the fullest bucket needs (each dispatch reads kGatherSlicePhotons photons
+    // of every bucket), one submit each.
+    const uint32_t slices = slicesFor(maxBucket());
+    for (uint32_t slice = 0; slice < slices; ++slice) {
+        gpu::CommandBatch batch(context_, 1);
+        batch.begin();
+        p.sliceBegin = slice * kGatherSlicePhotons;
+        batch.dispatch(pipeline, &p, sizeof(p), groups, 1, 1, "query");
+        batch.submitAndWait();
+    }
     return results.downloadAll<glm::vec4>();
 }
 

@@ -37,6 +37,10 @@ public:
     void beginPass(float cellSize);
     // Photons the last pass tried to store (more than capacity() when it overflowed).
     uint64_t storedCount() const;
+    // Photons in the fullest bucket of the last build (the scan records it).
+    uint32_t maxBucket() const;
+    // Gather slices (dispatches of kGatherSlicePhotons photons per bucket) for a bucket this full.
+    static uint32_t slicesFor(uint32_t photonsInBucket);
 
     // Records the hash-grid build over the stored photons: clear, count, scan, scatter.
     void recordBuild(gpu::CommandBatch& batch);

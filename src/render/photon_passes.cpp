@@ -1,14 +1,21 @@
-// Photon mapping's passes (ESTIMATORS.md section 3). One unit is one photon pass, one sample per
-// pixel: photon_trace emits photon_count paths into the shared photon buffer, hash_grid_build
-// sorts them into the hash grid, gather evaluates every pixel once.
+// Photon mapping's passes (docs/PHOTON-MAPPING.md). A photon pass is photon_trace (photon_count
+// paths into the shared photon buffer), hash_grid_build (the hash grid over them) and gather (every
+// pixel once; in slices when a bucket holds more than kGatherSlicePhotons photons).
 //
-// Radii per pass i (0-based; s = i + 1):
-//   photon_map:                         r = gather_radius
-//   progressive_photon_map:             r_s^2 = r_1^2 prod_{k=1}^{s-1} (k + alpha) / (k + 1)  (Knaus & Zwicker)
-//   photon_map + debias:                base level b = 1, r_b = gather_radius
-//   progressive_photon_map + debias:    base level b = s, r_b = r_s of the level schedule, pmf
-//                                       renormalised to j >= s (every pass unbiased)
+// Radii:
+//   photon_map:                         r = gather_radius, one pass = one sample
+//   progressive_photon_map:             pass i (0-based, s = i + 1): r_s^2 = r_1^2 prod_{k=1}^{s-1} (k + alpha) / (k + 1)
+//                                       (Knaus & Zwicker), one pass = one sample
+//   photon_map + debias:                a sample is a block of m^k passes at level k, base radius
+//                                       r_b = gather_radius, r_k^2 = r_b^2 s^k (scene/photon_levels.h)
+//   progressive_photon_map + debias:    the same, with block i's base radius r_b = r_{i+1} of the
+//                                       PPM schedule
 // The hash grid's cell size is 2 r_b, the largest gather diameter of the pass.
+//
+// Schedules of the blocks: uniform (the host draws one level per block for the whole image; a
+// unit is one pass and the last pass of a block completes one sample per pixel) or per_pixel
+// (each pixel draws its own level in the gather and keeps its own block; one pass is one unit and
+// one film sample index, pixels count their own completed blocks).
 #include <algorithm>
 #include <cmath>
 
@@ -17,8 +24,10 @@
 
 #include "render/photon_map.h"
 #include "render/sample_passes.h"
+#include "scene/photon_levels.h"
 #include "shared/gpu_types.h"
 #include "shared/photon_density.h"
+#include "shared/rng.h"
 
 namespace telescope {
 
@@ -26,36 +35,38 @@ namespace {
 
 bool unbiased(const IntegratorSettings& in) { return in.debias.estimator != DebiasEstimator::None; }
 bool progressive(const IntegratorSettings& in) { return in.type == IntegratorType::ProgressivePhotonMap; }
+bool perPixel(const IntegratorSettings& in) { return unbiased(in) && in.debias.schedule == LevelSchedule::PerPixel; }
 
 const char* kernelName(PhotonKernel k) {
     return k == PhotonKernel::Cone ? "cone" : k == PhotonKernel::Uniform ? "uniform" : "Epanechnikov";
 }
 
-shader::LevelPmf levelPmf(const PmfSettings& pmf) {
-    return {pmf.type == PmfType::PowerLaw ? shader::kPmfPowerLaw : shader::kPmfGeometric, pmf.r, pmf.alpha};
+shader::PhotonLevels photonLevels(const DebiasSettings& d) {
+    return {d.pmf.r, std::log(d.photon.areaRatio), d.photon.photonGrowth, d.photon.levelCap};
 }
 
-// Base radius and base level of pass i.
-struct PassRadius {
-    double radius;
-    double baseLevel;
-};
-
-PassRadius passRadius(const IntegratorSettings& in, uint64_t pass) {
+// Base radius of sample i (a pass, or a block of the uniform schedule).
+double baseRadius(const IntegratorSettings& in, uint64_t sample) {
     const double r1 = in.photon.gatherRadius;
-    if (!progressive(in)) return {r1, 1.0};
-    const double s = double(pass) + 1.0;
-    if (unbiased(in)) {
-        const double logR2 = shader::levelLogRadius2(levelPmf(in.debias.pmf), float(s), 1.0f);
-        return {r1 * std::exp(0.5 * logR2), s};
-    }
+    if (!progressive(in)) return r1;
     // prod_{k=1}^{s-1} (k + alpha) / (k + 1) = Gamma(s + alpha) / (Gamma(1 + alpha) Gamma(s + 1))
-    const double a = in.photon.alpha;
+    const double s = double(sample) + 1.0, a = in.photon.alpha;
     const double logScale = std::lgamma(s + a) - std::lgamma(1.0 + a) - std::lgamma(s + 1.0);
-    return {r1 * std::exp(0.5 * logScale), 1.0};
+    return r1 * std::exp(0.5 * logScale);
+}
+
+// The level of block `block` under the uniform schedule: drawn on the host from its own stream.
+uint32_t uniformBlockLevel(const DebiasSettings& d, uint64_t block, uint32_t seed) {
+    shader::Rng rng = shader::rngCreate(0x9e3779b9u, uint32_t(block), seed ^ 0x68bc21ebu);
+    const float u1 = shader::rngNext(rng), u2 = shader::rngNext(rng);
+    return shader::photonLevelSample(photonLevels(d), u1, u2);
 }
 
 }  // namespace
+
+uint32_t photonBlockLevel(const DebiasSettings& debias, uint64_t block, uint32_t seed) {
+    return uniformBlockLevel(debias, block, seed);
+}
 
 // ---- Plan ----
 void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
@@ -86,11 +97,31 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         plan.estimator = fmt::format("progressive photon mapping (Knaus & Zwicker), r_1 = {:g}, alpha = {:g}",
                                      ph.gatherRadius, ph.alpha);
     } else {
+        const DebiasSettings& d = in.debias;
+        const PhotonBlockSettings& b = d.photon;
+        const PhotonBlockTheory t = photonBlockTheory(d.pmf.r, b.areaRatio, b.photonGrowth);
+        const double truncation = std::pow(double(b.areaRatio), double(b.levelCap));
         plan.estimator = fmt::format(
-            "unbiased{} photon mapping, single-term K_r{} + (K_r(j+1) - K_r(j)) / p(j), r_1 = {:g}, {} levels, {}, level "
-            "drawn per pixel in the shader",
-            progressive(in) ? " progressive" : "", progressive(in) ? "(pass)" : "1", ph.gatherRadius,
-            in.debias.pmf.type == PmfType::PowerLaw ? "power-law" : "geometric", pmfDescription(in.debias.pmf));
+            "unbiased{} photon mapping in blocks: Z = mean K_r_b + mean (K_r(k+1) - K_r(k)) / p(k) over the m^k photon "
+            "passes of a level-k block; r_b = {:g}{}, r_k^2 = r_b^2 s^k with area_ratio s = {:g}, photon_growth m = {}, "
+            "p(k) = r (1-r)^k with r = {:g} (continues with q = {:g}) truncated to k < level_cap K = {}\n"
+            "  expected {:.3g} photon passes per sample ({:.3g} untruncated; heavy-tailed: a block at k = {} takes {} "
+            "passes); tail index of the sample error a = {:.3g} (finite mean, infinite variance); typical error ~ "
+            "cost^-{:.3g}\n"
+            "  truncation: unbiased for the kernel estimate at r_K; its bias is s^K = {:.2g} of the base bias\n"
+            "  schedule {}",
+            progressive(in) ? " progressive" : "", ph.gatherRadius,
+            progressive(in) ? fmt::format(" shrinking per block as progressive photon mapping's (alpha = {:g})", ph.alpha)
+                            : "",
+            b.areaRatio, b.photonGrowth, d.pmf.r, t.q, b.levelCap, photonExpectedPasses(d.pmf.r, b.photonGrowth, b.levelCap),
+            t.expectedPasses, b.levelCap - 1, std::pow(double(b.photonGrowth), double(b.levelCap - 1)), t.tailIndex,
+            t.errorExponent, truncation,
+            d.schedule == LevelSchedule::PerPixel
+                ? "per_pixel: each pixel draws its own level in the gather and keeps its own block across passes; "
+                  "--spp counts photon passes; blocks unfinished at the end are dropped, so the image is consistent, "
+                  "not unbiased (a bias towards short blocks that vanishes as passes grow)"
+                : "uniform: the host draws one level per block for the whole image; --spp counts blocks, --time "
+                  "finishes the running block; unbiased up to the truncation");
     }
 
     // ---- Feature switches ----
@@ -101,10 +132,9 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
     feature("disks", f.disks, "disk primitives present", "no disk primitives");
     feature("specular", f.specular, "mirror or dielectric materials present", "no mirror or dielectric materials");
     feature("next event", nee, "direct_lighting = next_event", "direct_lighting = photons: all light from photons");
-    feature("debias", unbiased(in), "debias block: K_r1 + correction", "no debias block: biased K_r");
+    feature("debias", unbiased(in), "debias block: blocks of passes, K_r_b + correction", "no debias block: biased K_r");
     plan.featuresOf = "photon_trace and gather";
 
-    const uint32_t levels = in.debias.pmf.type == PmfType::PowerLaw ? kPmfPowerLaw : kPmfGeometric;
     plan.photonSpec = {
         {kSpecHasSpheres, f.spheres},
         {kSpecHasDisks, f.disks},
@@ -115,9 +145,7 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
         {kSpecPhotonEstimator, unbiased(in) ? kPhotonUnbiased : kPhotonBiased},
         {kSpecPhotonKernel, uint32_t(ph.kernel)},
-        {kSpecPhotonLevels, levels},
-        {kSpecPhotonPmfR, gpu::specFloat(in.debias.pmf.r)},
-        {kSpecPhotonPmfAlpha, gpu::specFloat(in.debias.pmf.alpha)},
+        {kSpecPhotonSchedule, perPixel(in) ? kPhotonSchedulePerPixel : kPhotonScheduleUniform},
         {kSpecPhotonNextEvent, nee},
         {kSpecPhotonMaxBounces, in.maxBounces},
     };
@@ -131,11 +159,15 @@ public:
     PhotonPasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan, const RenderBuffers& b,
                  uint32_t seed)
         : scene_(scene),
+          seed_(seed),
           map_(context, scene.integrator.photon.photonCount),
           trace_(context, "photon_trace", shader::kSceneBindingCount, uint32_t(sizeof(shader::PhotonTracePush)),
                  plan.photonSpec),
           gather_(context, "gather", shader::kSceneBindingCount, uint32_t(sizeof(shader::GatherPush)),
-                  plan.photonSpec) {
+                  plan.photonSpec),
+          blockBuffer_(context, uint64_t(scene.camera.width) * scene.camera.height * shader::kGatherBlockVec4s * 16,
+                       "gather blocks") {
+        blockBuffer_.fill(0);
         trace_.bindBuffers({b.prims, b.nodes, b.materials, b.lights});
         gather_.bindBuffers({b.prims, b.nodes, b.materials, b.lights});
         const Camera& cam = scene.camera;
@@ -153,20 +185,37 @@ public:
         gatherPush_.seed = seed;
         gatherPush_.accumLo = uint32_t(b.accum->address());
         gatherPush_.accumHi = uint32_t(b.accum->address() >> 32);
+        gatherPush_.blockLo = uint32_t(blockBuffer_.address());
+        gatherPush_.blockHi = uint32_t(blockBuffer_.address() >> 32);
+        const shader::PhotonLevels levels = photonLevels(scene.integrator.debias);
+        gatherPush_.pmfR = levels.r;
+        gatherPush_.logAreaRatio = levels.logAreaRatio;
+        gatherPush_.photonGrowth = levels.growth;
+        gatherPush_.levelCap = levels.cap;
     }
 
     uint32_t samplesPerUnit() const override { return 1; }
     uint32_t maxUnitsPerBatch() const override { return 1; }
+    uint32_t dispatchesPerUnit() const override { return 16 + slices_; }
+    bool sampleInProgress() const override { return blocks() && passInBlock_ != 0; }
 
-    void recordUnit(gpu::CommandBatch& batch, uint64_t sampleBase, uint32_t samples) override {
-        if (samples != 1) throw std::logic_error("a photon pass adds one sample per pixel");
-        const PassRadius r = passRadius(scene_.integrator, sampleBase);
-        map_.beginPass(float(2.0 * r.radius));
+    // One photon pass. Returns the samples per pixel it completes: 1, or under the uniform
+    // schedule 1 only for the last pass of a block.
+    uint32_t recordUnit(gpu::CommandBatch& batch, uint64_t sampleBase, uint32_t samples) override {
+        if (samples != 1) throw std::logic_error("a photon pass adds at most one sample per pixel");
+        const IntegratorSettings& in = scene_.integrator;
+        if (blocks() && passInBlock_ == 0) {
+            block_.level = uniformBlockLevel(in.debias, sampleBase, seed_);
+            block_.passes = shader::photonBlockPasses(photonLevels(in.debias), block_.level);
+        }
+        const double radius = baseRadius(in, sampleBase);
+        map_.beginPass(float(2.0 * radius));
         const VkDeviceAddress header = map_.headerAddress();
 
         tracePush_.headerLo = uint32_t(header);
         tracePush_.headerHi = uint32_t(header >> 32);
         tracePush_.pass = uint32_t(sampleBase);
+        tracePush_.passInBlock = passInBlock_;
         const uint32_t traceGroups = (tracePush_.pathCount + shader::kPhotonTraceGroupSize - 1) / shader::kPhotonTraceGroupSize;
         // 2D when the paths need more workgroups than one dimension allows.
         const uint32_t gx = std::min<uint32_t>(traceGroups, 32768), gy = (traceGroups + gx - 1) / gx;
@@ -178,27 +227,39 @@ public:
         gatherPush_.pass = uint32_t(sampleBase);
         gatherPush_.headerLo = uint32_t(header);
         gatherPush_.headerHi = uint32_t(header >> 32);
-        gatherPush_.radius = float(r.radius);
-        gatherPush_.baseLevel = float(r.baseLevel);
+        gatherPush_.radius = float(radius);
+        gatherPush_.level = blocks() ? block_.level : 0;
+        gatherPush_.passInBlock = passInBlock_;
+        gatherPush_.sliceCount = slices_;
         const Camera& cam = scene_.camera;
-        batch.dispatch(gather_, &gatherPush_, sizeof(gatherPush_), (cam.width + 7) / 8, (cam.height + 7) / 8, 1,
-                       "gather");
+        for (uint32_t slice = 0; slice < slices_; ++slice) {
+            gatherPush_.slice = slice;
+            batch.dispatch(gather_, &gatherPush_, sizeof(gatherPush_), (cam.width + 7) / 8, (cam.height + 7) / 8, 1,
+                           "gather");
+        }
+        return blocks() && passInBlock_ + 1 < block_.passes ? 0 : 1;
     }
 
     bool batchComplete() override {
         const uint64_t stored = map_.storedCount();
+        const uint32_t fullest = map_.maxBucket();
         lastStored_ = stored;
-        if (stored <= map_.capacity()) {
-            map_.shrinkTo(stored + stored / 4);  // the next pass stores about as many
-            return true;
+        const uint32_t slicesNeeded = PhotonMap::slicesFor(fullest);
+        if (stored > map_.capacity() || slicesNeeded > slices_) {
+            // The gather skipped its accumulation: grow what was short and repeat the pass.
+            if (stored > map_.capacity()) map_.reserve(stored + stored / 4);
+            if (slicesNeeded > slices_) slices_ = PhotonMap::slicesFor(fullest + fullest / 4);
+            return false;
         }
-        map_.reserve(stored + stored / 4);  // the gather skipped its accumulation: repeat the pass
-        return false;
+        map_.shrinkTo(stored + stored / 4);  // the next pass stores about as many
+        if (slicesNeeded * 2 < slices_) slices_ = PhotonMap::slicesFor(fullest + fullest / 4);
+        if (blocks() && ++passInBlock_ == block_.passes) passInBlock_ = 0;
+        return true;
     }
 
     uint64_t photonPathsLastBatch() const override { return tracePush_.pathCount; }
     uint64_t photonsStoredLastBatch() const override { return lastStored_; }
-    uint64_t deviceBytes() const override { return map_.deviceBytes(); }
+    uint64_t deviceBytes() const override { return map_.deviceBytes() + blockBuffer_.size(); }
 
     void recordWarmUp(gpu::CommandBatch& batch) override {
         map_.recordWarmUp(batch);
@@ -211,16 +272,30 @@ public:
         g.width = g.height = 0;
         g.headerLo = t.headerLo;
         g.headerHi = t.headerHi;
+        g.sliceCount = 1;
         batch.dispatch(gather_, &g, sizeof(g), 1, 1, 1, "warm-up");
     }
 
 private:
+    // The uniform schedule's blocks (per_pixel keeps its blocks in the gather's buffer).
+    bool blocks() const { return unbiased(scene_.integrator) && !perPixel(scene_.integrator); }
+
+    struct UniformBlock {
+        uint32_t level = 0;
+        uint32_t passes = 1;  // m^level
+    };
+
     const Scene& scene_;
+    uint32_t seed_;
     PhotonMap map_;
     gpu::ComputePipeline trace_, gather_;
+    gpu::Buffer blockBuffer_;  // the gather's per-pixel block sums and slice sums
+    UniformBlock block_;
     shader::PhotonTracePush tracePush_{};
     shader::GatherPush gatherPush_{};
     uint64_t lastStored_ = 0;
+    uint32_t passInBlock_ = 0;
+    uint32_t slices_ = 1;
 };
 
 }  // namespace

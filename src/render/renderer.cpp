@@ -85,18 +85,20 @@ void Renderer::render(const RenderRequest& request) {
     uint32_t unitsPerBatch = 1;  // grows until a batch takes about a quarter second
     while (true) {
         double elapsed = secondsSince(start);
-        if (timed ? elapsed >= request.timeLimit : done >= request.spp) break;
+        // A time-limited render finishes a sample that takes several units (a block of passes).
+        if (timed ? elapsed >= request.timeLimit && !passes_->sampleInProgress() : done >= request.spp) break;
 
         // ---- One batch: several units, one submit ----
+        const uint32_t maxUnits = std::min(unitsPerBatch, passes_->maxUnitsPerBatch());
+        batch_->reserve(maxUnits * passes_->dispatchesPerUnit());
         batch_->begin();
         uint64_t batchSamples = 0;
         uint32_t units = 0;
-        for (; units < std::min(unitsPerBatch, passes_->maxUnitsPerBatch()); ++units) {
+        for (; units < maxUnits; ++units) {
             uint64_t remaining = timed ? perUnit : request.spp - done - batchSamples;
             if (remaining == 0) break;
             uint32_t samples = uint32_t(std::min<uint64_t>(perUnit, remaining));
-            passes_->recordUnit(*batch_, sampleIndex_ + batchSamples, samples);
-            batchSamples += samples;
+            batchSamples += passes_->recordUnit(*batch_, sampleIndex_ + batchSamples, samples);
         }
         auto batchStart = Clock::now();
         auto timings = batch_->submitAndWait();
@@ -108,6 +110,7 @@ void Renderer::render(const RenderRequest& request) {
         }
         if (!passes_->batchComplete()) continue;  // nothing was accumulated: run it again
         stats_.photonPaths += passes_->photonPathsLastBatch();
+        stats_.photonPasses += passes_->photonPathsLastBatch() ? units : 0;
         stats_.photonsStored += passes_->photonsStoredLastBatch();
         stats_.photonMapBytes = passes_->deviceBytes();
         done += batchSamples;
@@ -162,6 +165,9 @@ Film Renderer::film() const {
     const Camera& cam = scene_.camera;
     Film film(cam.width, cam.height);
     film.setSamplesPerPixel(sampleIndex_);
+    const DebiasSettings& d = scene_.integrator.debias;
+    film.setPerPixelCounts(usesPhotons(scene_.integrator) && d.estimator != DebiasEstimator::None &&
+                           d.schedule == LevelSchedule::PerPixel);
     std::vector<glm::vec4> raw(film.pixelCount() * shader::kChannelCount * 2);
     accum_.download(raw.data(), raw.size() * sizeof(glm::vec4));
     for (uint32_t c = 0; c < shader::kChannelCount; ++c) {

@@ -53,6 +53,7 @@ struct RenderStats {
     uint64_t samplesPerPixel = 0;
     uint64_t submits = 0;
     uint64_t photonPaths = 0;    // photon mapping: photon paths traced, all passes
+    uint64_t photonPasses = 0;   // photon mapping: photon passes (a block of the unbiased estimator has several)
     uint64_t photonsStored = 0;  // photon mapping: photons stored, all passes
     uint64_t photonMapBytes = 0; // photon mapping: device memory of the photon map now
     std::map<std::string, PassStats> passes;

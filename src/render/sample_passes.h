@@ -37,9 +37,15 @@ public:
     virtual ~SamplePasses() = default;
     virtual uint32_t samplesPerUnit() const = 0;
     virtual uint32_t maxUnitsPerBatch() const = 0;
-    // Records the dispatches of one unit adding `samples` (<= samplesPerUnit()) samples per pixel,
-    // whose global indices start at sampleBase.
-    virtual void recordUnit(gpu::CommandBatch& batch, uint64_t sampleBase, uint32_t samples) = 0;
+    // Dispatches one unit records at most.
+    virtual uint32_t dispatchesPerUnit() const { return 1; }
+    // Records the dispatches of one unit adding up to `samples` (<= samplesPerUnit()) samples per
+    // pixel, whose global indices start at sampleBase; returns the samples it completes (fewer when
+    // a sample takes several units: a block of photon passes completes with its last pass).
+    virtual uint32_t recordUnit(gpu::CommandBatch& batch, uint64_t sampleBase, uint32_t samples) = 0;
+    // True between the units of a sample that takes several (a block of photon passes): a render
+    // stopped by time finishes it first.
+    virtual bool sampleInProgress() const { return false; }
     // After the batch ran: false when it must be recorded and run again.
     virtual bool batchComplete() { return true; }
     // Photon mapping: photon paths traced and photons stored by the last complete batch.
@@ -58,6 +64,9 @@ std::unique_ptr<SamplePasses> makePathTracePasses(gpu::Context& context, const S
                                                   const RenderBuffers& buffers, uint32_t seed);
 std::unique_ptr<SamplePasses> makePhotonPasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan,
                                                const RenderBuffers& buffers, uint32_t seed);
+
+// Unbiased photon mapping, uniform schedule: the level of block `block` (its sample index).
+uint32_t photonBlockLevel(const DebiasSettings& debias, uint64_t block, uint32_t seed);
 
 // The passes, feature switches and specialisation constants each integrator adds to a plan
 // (render_plan.cpp calls the one of the scene's integrator).

@@ -125,10 +125,19 @@ constexpr uint32_t kNoPilotLevel = 0xffffffffu;
 // How per-sample levels are laid out on the device's lanes (shared/gpu_types.h kLevelSchedule*).
 enum class LevelSchedule : uint32_t { PerPixel = 0, Uniform = 1, Queued = 2 };
 
+// Photon mapping's blocks (docs/PHOTON-MAPPING.md, scene/photon_levels.h): level k of a block
+// has kernel area s^k times the base and m^k photon passes; levels k < K.
+struct PhotonBlockSettings {
+    float areaRatio = 0.70710678f;  // s ("area_ratio")
+    uint32_t photonGrowth = 3;      // m ("photon_growth")
+    uint32_t levelCap = 20;         // K ("level_cap"; the loader's default: s^K < 1e-3)
+};
+
 struct DebiasSettings {
     DebiasEstimator estimator = DebiasEstimator::None;
     PmfSettings pmf;
-    LevelSchedule schedule = LevelSchedule::PerPixel;
+    LevelSchedule schedule = LevelSchedule::PerPixel;  // photon mapping: Uniform or PerPixel
+    PhotonBlockSettings photon;                        // photon mapping only
 };
 
 enum class IntegratorType : uint32_t { PathTracer = 0, PhotonMap = 1, ProgressivePhotonMap = 2 };

@@ -23,6 +23,7 @@
 
 #include "core/error.h"
 #include "scene/density_grid.h"
+#include "scene/photon_levels.h"
 #include "scene/transform.h"
 
 namespace telescope {
@@ -218,7 +219,8 @@ private:
     void readPrimitive(const json& v, const std::string& key);
     void readCamera(const json& v);
     void readIntegrator(const json& v);
-    void readDebias(const json& v, const std::string& key);
+    void readDebias(const json& v, const std::string& key, bool photons = false);
+    void readPhotonBlocks(const json& v, const std::string& key);
     void readPhotonSettings(const json& v, const std::string& key);
     void readRenderer(const json& v);
 
@@ -797,29 +799,76 @@ void SceneReader::readPhotonSettings(const json& v, const std::string& key) {
                   fmt::format("unknown direct lighting '{}' (expected \"photons\" or \"next_event\")", name));
     }
     if (const json* d = find(v, "debias"); d && !d->is_null()) {
-        readDebias(*d, "integrator.debias");
-        if (s.debias.estimator != DebiasEstimator::SingleTerm)
-            fail("integrator.debias.estimator", "photon mapping supports only the \"single_term\" estimator");
-        if (s.debias.pmf.type == PmfType::Auto)
-            fail("integrator.debias.pmf.type", "photon mapping does not support the \"auto\" pmf (no pilot for photons)");
-        // Without a pmf: the power-law levels of the PPM radius schedule, with the integrator's alpha.
-        if (!d->contains("pmf")) {
-            s.debias.pmf.type = PmfType::PowerLaw;
-            s.debias.pmf.alpha = p.alpha;
-        }
+        readDebias(*d, "integrator.debias", true);
+        readPhotonBlocks(*d, "integrator.debias");
     }
     ignoreUnread(v, key, {"type", "min_bounces", "max_bounces", "enable_two_sided_shading", "photon_count",
                           "gather_radius", "alpha", "kernel", "direct_lighting", "debias"});
 }
 
+// Photon mapping's blocks (docs/PHOTON-MAPPING.md): the geometric level pmf (r = 0.7 by default,
+// continuing with q = 0.3), area_ratio s, photon_growth m, level_cap K and the schedule
+// (uniform by default). Settings whose expected cost is infinite (q m >= 1) or whose samples
+// have no finite mean (tail index a <= 1, i.e. m s <= 1) are rejected.
+void SceneReader::readPhotonBlocks(const json& v, const std::string& key) {
+    DebiasSettings& d = scene_.integrator.debias;
+    PhotonBlockSettings& b = d.photon;
+    if (d.estimator != DebiasEstimator::SingleTerm)
+        fail(member(key, "estimator"), "photon mapping supports only the \"single_term\" estimator");
+    if (!v.contains("pmf")) {
+        d.pmf.type = PmfType::Geometric;
+        d.pmf.r = 0.7f;
+    } else if (d.pmf.type != PmfType::Geometric) {
+        fail(member(member(key, "pmf"), "type"),
+             "photon mapping's block levels take a \"geometric\" pmf (expected photon passes are infinite with a "
+             "power law, and there is no pilot for \"auto\")");
+    }
+    d.schedule = LevelSchedule::Uniform;
+    if (const json* schedule = find(v, "level_schedule")) {
+        const std::string scheduleKey = member(key, "level_schedule");
+        const std::string name = string(*schedule, scheduleKey);
+        if (name == "uniform") d.schedule = LevelSchedule::Uniform;
+        else if (name == "per_pixel") d.schedule = LevelSchedule::PerPixel;
+        else fail(scheduleKey, fmt::format("photon mapping takes the level schedule \"uniform\" or \"per_pixel\", got '{}'", name));
+        if (d.schedule == LevelSchedule::PerPixel && scene_.integrator.type == IntegratorType::ProgressivePhotonMap)
+            fail(scheduleKey, "progressive_photon_map shrinks the base radius per block, which needs the \"uniform\" schedule");
+    }
+    if (const json* a = find(v, "area_ratio")) {
+        const std::string areaKey = member(key, "area_ratio");
+        b.areaRatio = number(*a, areaKey);
+        if (!(b.areaRatio > 0.0f && b.areaRatio < 1.0f)) fail(areaKey, fmt::format("must be in (0, 1), got {}", b.areaRatio));
+    }
+    if (const json* m = find(v, "photon_growth")) b.photonGrowth = integer(*m, member(key, "photon_growth"), 1, 1024);
+    const PhotonBlockTheory t = photonBlockTheory(d.pmf.r, b.areaRatio, b.photonGrowth);
+    if (!(t.q * b.photonGrowth < 1.0))
+        fail(member(key, "photon_growth"),
+             fmt::format("the expected photon passes per sample (1 - q) / (1 - q m) are infinite: q m = {:.4g} >= 1 "
+                         "(q = 1 - pmf.r = {:.4g}, m = {})",
+                         t.q * b.photonGrowth, t.q, b.photonGrowth));
+    if (!(t.tailIndex > 1.0))
+        fail(member(key, "photon_growth"),
+             fmt::format("the samples have no finite mean: tail index a = ln(1/q) / (ln(1/q) - ln(m s) / 2) = {:.4g} <= 1 "
+                         "(needs photon_growth x area_ratio > 1, got {} x {:.4g} = {:.4g})",
+                         t.tailIndex, b.photonGrowth, b.areaRatio, b.photonGrowth * b.areaRatio));
+    const std::string capKey = member(key, "level_cap");
+    if (const json* k = find(v, "level_cap")) b.levelCap = integer(*k, capKey, 1, 64);
+    else b.levelCap = photonDefaultLevelCap(b.areaRatio);
+    const double longest = std::pow(double(b.photonGrowth), double(b.levelCap) - 1.0);
+    if (!(longest < 2147483648.0))
+        fail(capKey, fmt::format("a block at the last level would take m^(K-1) = {:.4g} photon passes (at most 2^31); "
+                                 "lower the cap (K = {}{}) or photon_growth",
+                                 longest, b.levelCap, find(v, "level_cap") ? "" : ", the default for this area_ratio"));
+}
+
 // Telescope's own block, read strictly: every key must be known.
-void SceneReader::readDebias(const json& v, const std::string& key) {
+void SceneReader::readDebias(const json& v, const std::string& key, bool photons) {
     expectObject(v, key);
     auto rejectUnknown = [&](const json& obj, const std::string& objKey, std::initializer_list<std::string_view> known) {
         for (const auto& [name, value] : obj.items())
             if (!isOneOf(known, name)) fail(member(objKey, name), fmt::format("unknown key '{}' in {}", name, objKey));
     };
-    rejectUnknown(v, key, {"estimator", "pmf", "level_schedule"});
+    if (photons) rejectUnknown(v, key, {"estimator", "pmf", "level_schedule", "area_ratio", "photon_growth", "level_cap"});
+    else rejectUnknown(v, key, {"estimator", "pmf", "level_schedule"});
     DebiasSettings& d = scene_.integrator.debias;
 
     const std::string estimatorKey = member(key, "estimator");
@@ -830,7 +879,7 @@ void SceneReader::readDebias(const json& v, const std::string& key) {
     else if (name == "sum") d.estimator = DebiasEstimator::Sum;
     else fail(estimatorKey, fmt::format("unknown debias estimator '{}' (expected \"single_term\" or \"sum\")", name));
 
-    if (const json* schedule = find(v, "level_schedule")) {
+    if (const json* schedule = find(v, "level_schedule"); schedule && !photons) {
         const std::string scheduleKey = member(key, "level_schedule");
         const std::string s = string(*schedule, scheduleKey);
         if (s == "per_pixel") d.schedule = LevelSchedule::PerPixel;

@@ -18,8 +18,6 @@ glm::vec3 uniformDirection(float u1, float u2) {
     return glm::vec3(s * std::cos(phi), s * std::sin(phi), z);
 }
 
-LevelPmf powerLaw(float alpha) { return LevelPmf{kPmfPowerLaw, 0.0f, alpha}; }
-LevelPmf geometric(float r) { return LevelPmf{kPmfGeometric, r, 0.0f}; }
 
 // Integral of W over the disk by the midpoint rule in d.
 double integrateOverDisk(uint kernel, double r) {
@@ -60,73 +58,108 @@ TEST(PhotonKernel, DifferenceMatchesDoublePrecisionForModerateSteps) {
 }
 
 TEST(PhotonKernel, DifferenceKeepsItsSizeWhenTheRadiiAgreeInFloat) {
-    // Level j = 2^40: r_{j+1} and r_j are equal in float, the difference is not zero.
-    const LevelPmf pmf = powerLaw(2.0f / 3.0f);
-    const float j = std::ldexp(1.0f, 40);
-    const float logStep = levelLogStep2(pmf, j);
+    // A ratio of areas 1 - 2^-30: r' and r are equal in float, the difference is not zero.
+    const float logStep = float(std::log1p(-std::ldexp(1.0, -30)));
     EXPECT_LT(logStep, 0.0f);
-    const double eps = -(2.0 / 3.0 - 1.0) * std::log1p(1.0 / std::ldexp(1.0, 40));
-    EXPECT_NEAR(logStep, -eps, 1e-6 * eps);
+    const double eps = std::ldexp(1.0, -30);
     // At the centre: 3 (r^2/r'^2 - 1) / (pi r^2) = 3 eps / (pi r^2) to first order.
     float diff = kernelDifference(kKernelCone, 0.0f, 1.0f, logStep);
     EXPECT_NEAR(diff, 3.0 * eps / M_PI, 1e-5 * 3.0 * eps / M_PI);
-    // Divided by p(j) it stays finite and positive.
-    float p = levelProbabilityFrom(pmf, j, 1.0f);
-    EXPECT_GT(p, 0.0f);
-    EXPECT_TRUE(std::isfinite(diff / p));
 }
 
-TEST(PhotonLevels, PowerLawScheduleAndPmf) {
-    const LevelPmf pmf = powerLaw(2.0f / 3.0f);
-    // r_j^2 / r_1^2 = j^(alpha-1)
-    EXPECT_NEAR(std::exp(levelLogRadius2(pmf, 8.0f, 1.0f)), 0.5, 1e-6);
-    // p(j) = j^(alpha-1) - (j+1)^(alpha-1) sums to one, and renormalised to j >= b too.
-    for (float b : {1.0f, 5.0f}) {
-        double sum = 0.0;
-        for (int j = int(b); j < 200000; ++j) sum += levelProbabilityFrom(pmf, float(j), b);
-        double tail = std::pow(200000.0 / b, -1.0 / 3.0);
-        EXPECT_NEAR(sum + tail, 1.0, 1e-4) << "b = " << b;
+PhotonLevels defaultLevels() { return PhotonLevels{0.7f, float(std::log(std::sqrt(0.5))), 3u, 20u}; }
+
+TEST(PhotonLevels, RadiiPassesAndPmf) {
+    const PhotonLevels l = defaultLevels();
+    EXPECT_NEAR(std::exp(photonLevelLogRadius2(l, 4)), 0.25, 1e-6);  // r_k^2 = r_b^2 2^(-k/2)
+    EXPECT_EQ(photonBlockPasses(l, 0), 1u);
+    EXPECT_EQ(photonBlockPasses(l, 5), 243u);
+    EXPECT_EQ(photonBlockPasses(l, 19), 1162261467u);
+    // p(k) = r q^k / (1 - q^K) sums to one over k < K.
+    double sum = 0.0, passes = 0.0;
+    for (uint32_t k = 0; k < l.cap; ++k) {
+        sum += photonLevelProbability(l, k);
+        passes += photonLevelProbability(l, k) * photonBlockPasses(l, k);
     }
-    EXPECT_NEAR(levelProbabilityFrom(pmf, 1.0f, 1.0f), 1.0 - std::pow(2.0, -1.0 / 3.0), 1e-6);
+    EXPECT_NEAR(sum, 1.0, 1e-5);
+    EXPECT_NEAR(photonLevelProbability(l, 2), 0.7 * 0.09 / (1.0 - std::pow(0.3, 20)), 1e-7);
+    // Expected passes per sample: (1 - q) / (1 - q m) = 7 untruncated; the cap removes 0.9^20 of it.
+    EXPECT_NEAR(passes, 7.0 * (1.0 - std::pow(0.9, 20)), 1e-3);
 }
 
-TEST(PhotonLevels, GeometricScheduleAndPmf) {
-    const LevelPmf pmf = geometric(0.65f);
-    EXPECT_NEAR(std::exp(levelLogRadius2(pmf, 3.0f, 1.0f)), 0.25, 1e-6);  // r_j = r_1 / sqrt(2)^(j-1)
-    EXPECT_NEAR(levelProbabilityFrom(pmf, 4.0f, 2.0f), 0.65 * 0.35 * 0.35, 1e-6);
-}
-
-// The sampler against its pmf: chi-square over levels 1..15 and the tail (48 random bits).
+// The sampler against its pmf: chi-square over all levels of a short cap and the default one.
 TEST(PhotonLevels, SamplerMatchesThePmf) {
-    for (LevelPmf pmf : {powerLaw(2.0f / 3.0f), geometric(0.5f)}) {
-        for (float b : {1.0f, 3.0f}) {
-            const int bins = 15, n = 200000;
-            std::vector<double> counts(bins + 1, 0.0);
-            Rng rng = rngCreate(3, 5, 7);
-            for (int i = 0; i < n; ++i) {
-                float u1 = rngNext(rng), u2 = rngNext(rng);
-                float j = levelSampleFrom(pmf, b, u1, u2);
-                if (j == 0.0f) continue;  // beyond the truncation (probability ~1e-10 here)
-                ASSERT_GE(j, b);
-                counts[j - b >= float(bins) ? bins : int(j - b)] += 1.0;
-            }
-            double chi2 = 0.0, tail = 1.0;
-            for (int k = 0; k <= bins; ++k) {
-                double p = k < bins ? levelProbabilityFrom(pmf, b + float(k), b) : tail;
-                tail -= p;
-                chi2 += (counts[k] - p * n) * (counts[k] - p * n) / (p * n);
-            }
-            EXPECT_LT(chi2, 45.0) << "16 bins, 15 dof, p ~ 1e-4";  // chi2(15) 0.9999 quantile ~ 44
+    for (PhotonLevels l : {defaultLevels(), PhotonLevels{0.4f, -0.5f, 2u, 6u}}) {
+        const int n = 400000;
+        std::vector<double> counts(l.cap, 0.0);
+        Rng rng = rngCreate(3, 5, 7);
+        for (int i = 0; i < n; ++i) {
+            float u1 = rngNext(rng), u2 = rngNext(rng);
+            uint32_t k = photonLevelSample(l, u1, u2);
+            ASSERT_LT(k, l.cap);
+            counts[k] += 1.0;
         }
+        // Bins with at least 20 expected draws; the rest pooled into the last bin.
+        double chi2 = 0.0, pooledCount = 0.0, pooledP = 0.0;
+        int bins = 0;
+        for (uint32_t k = 0; k < l.cap; ++k) {
+            double p = photonLevelProbability(l, k);
+            if (p * n < 20.0) {
+                pooledCount += counts[k];
+                pooledP += p;
+                continue;
+            }
+            chi2 += (counts[k] - p * n) * (counts[k] - p * n) / (p * n);
+            ++bins;
+        }
+        if (pooledP * n > 0.0) {
+            chi2 += (pooledCount - pooledP * n) * (pooledCount - pooledP * n) / std::max(pooledP * n, 1.0);
+            ++bins;
+        }
+        // chi2 quantile 1 - 1e-4 for <= 12 degrees of freedom is below 38.
+        EXPECT_LT(chi2, 38.0) << bins << " bins, cap " << l.cap;
     }
 }
 
-TEST(PhotonLevels, TruncationOnlyBeyondTheRadiusFloor) {
-    const LevelPmf pmf = powerLaw(2.0f / 3.0f);
-    // v = 2^-24 gives j ~ 2^72: r_j^2 / r_1^2 = 2^-24 > 2^-32, still corrected.
-    EXPECT_GT(levelSampleFrom(pmf, 1.0f, 1.0f - std::ldexp(1.0f, -24), 0.0f), 1e20f);
-    // v ~ 2^-40 gives r_j^2 / r_1^2 ~ 2^-40 < 2^-32: truncated.
-    EXPECT_EQ(levelSampleFrom(pmf, 1.0f, 1.0f - std::ldexp(1.0f, -24), 1.0f - std::ldexp(1.0f, -16)), 0.0f);
+TEST(PhotonLevels, ASkewedSamplerFailsTheSameTest) {
+    // The control: levels drawn with r = 0.66 tested against the pmf with r = 0.7.
+    PhotonLevels wrong = defaultLevels();
+    wrong.r = 0.66f;
+    const PhotonLevels l = defaultLevels();
+    const int n = 400000;
+    std::vector<double> counts(l.cap, 0.0);
+    Rng rng = rngCreate(3, 5, 7);
+    for (int i = 0; i < n; ++i) {
+        float u1 = rngNext(rng), u2 = rngNext(rng);
+        counts[photonLevelSample(wrong, u1, u2)] += 1.0;
+    }
+    double chi2 = 0.0;
+    for (uint32_t k = 0; k < 6; ++k) {
+        double p = photonLevelProbability(l, k);
+        chi2 += (counts[k] - p * n) * (counts[k] - p * n) / (p * n);
+    }
+    EXPECT_GT(chi2, 38.0);
+}
+
+TEST(PhotonLevels, SamplerResolvesTheDeepLevels) {
+    // 48 random bits: P(level >= k) = (q^k - q^K) / (1 - q^K) holds down to the cap, where one
+    // float's 24 bits would stop at level 13 (0.3^14 < 2^-24), 7 levels short of K = 20.
+    const PhotonLevels l = defaultLevels();
+    const double q = 0.3, qK = std::pow(q, 20);
+    for (uint32_t k : {1u, 5u, 13u, 17u, 19u}) {
+        // v just below the tail probability of k draws level k; just above it, level k - 1.
+        const double tail = (std::pow(q, k) - qK) / (1.0 - qK);
+        auto draw = [&](double v) {
+            // v = (1 - u1) - u2 2^-24, split into the two 24-bit draws
+            double u1 = 1.0 - std::ceil(v * 16777216.0) / 16777216.0;
+            double u2 = (std::ceil(v * 16777216.0) - v * 16777216.0);
+            return photonLevelSample(l, float(u1), float(u2));
+        };
+        EXPECT_EQ(draw(tail * 0.999), k) << "k = " << k;
+        EXPECT_EQ(draw(tail * 1.001), k - 1) << "k = " << k;
+    }
+    EXPECT_EQ(photonLevelSample(l, 0.0f, 0.0f), 0u);
+    EXPECT_EQ(photonLevelSample(l, 1.0f - std::ldexp(1.0f, -24), 1.0f - std::ldexp(1.0f, -24)), l.cap - 1);
 }
 
 TEST(PhotonGridCells, NegativeCoordinatesRoundDown) {
