@@ -88,6 +88,38 @@ TEST_F(PhotonCli, BadPhotonSettingsNameTheFileAndKey) {
     expectBadInput("integrator.debias={\"estimator\":\"sum\"}", "integrator.debias.estimator");
 }
 
+TEST_F(PhotonCli, BadBlockSettingsNameTheKeyAndTheComputedValue) {
+    // q m >= 1: infinite expected cost (q = 1 - r = 0.5, m = 3 gives q m = 1.5).
+    expectBadInput("integrator.debias.pmf={\"type\":\"geometric\",\"r\":0.5}", "integrator.debias.photon_growth");
+    expectBadInput("integrator.debias.pmf={\"type\":\"geometric\",\"r\":0.5}", "q m = 1.5");
+    // m s <= 1: tail index a <= 1, no finite mean (the fixed photon count of the old design, m = 1).
+    expectBadInput("integrator.debias.photon_growth=1", "tail index a = ");
+    expectBadInput("integrator.debias.area_ratio=0.3", "integrator.debias.photon_growth");
+    expectBadInput("integrator.debias.area_ratio=1.5", "integrator.debias.area_ratio");
+    expectBadInput("integrator.debias.pmf={\"type\":\"power_law\"}", "integrator.debias.pmf.type");
+    expectBadInput("integrator.debias.level_cap=0", "integrator.debias.level_cap");
+    expectBadInput("integrator.debias.level_cap=25", "integrator.debias.level_cap");  // 3^24 passes
+    expectBadInput("integrator.debias.level_schedule=\"queued\"", "integrator.debias.level_schedule");
+    expectBadInput("integrator.debias.levels=3", "integrator.debias.levels");
+}
+
+TEST_F(PhotonCli, PlanShowsTheBlockScheduleAndTheTruncation) {
+    std::string text, err;
+    ASSERT_EQ(run("plan " + scene(), &text, &err), 0) << err;
+    for (const char* want : {"photon_growth m = 3", "area_ratio s = 0.707107", "level_cap K = 20", "r = 0.7",
+                             "expected 6.15 photon passes per sample", "tail index of the sample error a = 1.45",
+                             "s^K = 0.00098 of the base bias", "schedule uniform", "unbiased up to the truncation"})
+        EXPECT_NE(text.find(want), std::string::npos) << want << " missing in\n" << text;
+    ASSERT_EQ(run("plan " + scene() + " --set integrator.debias.level_schedule='\"per_pixel\"'", &text, &err), 0) << err;
+    EXPECT_NE(text.find("consistent, not unbiased"), std::string::npos) << text;
+    std::string err2;
+    EXPECT_EQ(run("plan " + scene() + " --set integrator.debias.level_schedule='\"per_pixel\"' --set "
+                  "integrator.type='\"progressive_photon_map\"'",
+                  nullptr, &err2),
+              2);
+    EXPECT_NE(err2.find("integrator.debias.level_schedule"), std::string::npos) << err2;
+}
+
 TEST_F(PhotonCli, ProgressiveTypeIsAccepted) {
     std::string err;
     EXPECT_EQ(run("plan " + scene() + " --set 'integrator.type=\"progressive_photon_map\"'", nullptr, &err), 0) << err;

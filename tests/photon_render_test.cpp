@@ -1,13 +1,12 @@
 // Photon mapping on the device against the analytic point light over a diffuse plane
 // (scenes/point-plane-photon.json): L = (albedo / pi) I cos(theta) / d^2.
 //
-// The unbiased estimator has infinite variance (ESTIMATORS.md sections 3 and 6; its correction
-// even has tails P(|Z| > z) ~ 1/z, see docs/PHOTON-MAPPING.md), so a per-pixel Z-test with the
-// sample variance is meaningless. Each test renders B independent batches (seeds) and tests, per
-// image region, the batch means: a t-test with the batch means' own spread, and a sign test (the
-// number of batch means above the analytic value is Binomial(B, 1/2) for a symmetric batch-mean
-// distribution centred on the answer), both Sidak-corrected over the regions. The biased
-// estimator with a large radius fails the same test.
+// Unbiased photon mapping has infinite variance (tail index a = 1.45 with the default blocks,
+// docs/PHOTON-MAPPING.md), so a per-pixel Z-test with the sample variance is meaningless. Each
+// test renders B batches of blocks and tests, per image region, the batch means: a t-test with the
+// batch means' own spread (Student quantile) and a sign test, both Sidak-corrected over the
+// regions. Every unbiasedness test has a positive control at the same sample count: the same
+// samples with the correction dropped, which the same tests must reject (docs/TESTING.md).
 #include <gtest/gtest.h>
 
 #include <algorithm>
