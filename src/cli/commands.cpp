@@ -341,6 +341,11 @@ int runConverge(const CommonOptions& common, const ConvergeOptionsCli& c) {
     o.sppList = c.sppList;
     o.seed = c.seed;
     o.seedCount = c.seeds;
+    if (!c.region.empty()) {
+        if (c.region.size() != 4 || c.region[2] <= 0 || c.region[3] <= 0)
+            throw InputError("", "--region", "expected X,Y,W,H with a positive width and height");
+        o.region = PixelRegion{c.region[0], c.region[1], c.region[2], c.region[3]};
+    }
     o.outDir = c.outDir;
     if (!common.quiet) o.log = [](const std::string& line) { fmt::print(stderr, "converge: {}\n", line); };
 

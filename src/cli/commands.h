@@ -58,6 +58,7 @@ struct ConvergeOptionsCli {
     std::vector<uint64_t> sppList;
     uint32_t seed = 1;
     uint32_t seeds = 1;
+    std::vector<int> region;  // --region X,Y,W,H
     std::string outDir;
 };
 

@@ -99,6 +99,9 @@ int main(int argc, char** argv) {
     converge->add_option("--seed", convergeOptions.seed, "Random seed");
     converge->add_option("--seeds", convergeOptions.seeds,
                          "Independent runs per method (seeds SEED, SEED+1, ...); the table and plot show their mean");
+    converge->add_option("--region", convergeOptions.region,
+                         "Measure the error over pixels X,Y,W,H only (e.g. a caustic); the strip shows that crop")
+        ->delimiter(',');
     converge->add_option("-o,--output", convergeOptions.outDir, "Output directory")->required();
 
     // ---- study transmittance ----

@@ -153,7 +153,14 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
 
     ConvergeReport report;
     const int width = reference.width, height = reference.height;
-    const Crop crop = defaultCrop(width, height);
+    Crop crop = defaultCrop(width, height);
+    if (o.region.w > 0) {
+        if (o.region.x < 0 || o.region.y < 0 || o.region.h <= 0 || o.region.x + o.region.w > width ||
+            o.region.y + o.region.h > height)
+            throw InputError("", "--region", fmt::format("{},{},{},{} is not inside the {}x{} image", o.region.x,
+                                                         o.region.y, o.region.w, o.region.h, width, height));
+        crop = Crop{o.region.x, o.region.y, o.region.w, o.region.h, std::max(1, 160 / o.region.h)};
+    }
     std::vector<std::vector<float>> strip(size_t(crop.h * crop.scale));
     appendPanel(strip, crop, width, [&](size_t p, int c) { return reference.pixels[p * 3 + c]; });
 
@@ -204,7 +211,7 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
                 p.spp = film.samplesPerPixel();
                 p.wallSeconds = renderer.stats().wallSeconds + pilot.pilotWallSeconds;
                 p.gpuSeconds = gpuSeconds(renderer.stats()) + pilot.pilotGpuSeconds;
-                p.error = compareToReference(film, reference);
+                p.error = compareToReference(film, reference, o.region);
                 run.push_back(p);
                 report.points.push_back(p);
                 log(fmt::format("  seed {} slice {}: {} spp, {:.3f} s GPU, relMSE {:.4g}, bias {:+.4g}", seed, s, p.spp,
@@ -298,6 +305,9 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
     md += o.seedCount > 1 ? fmt::format("Seeds {} to {}: each row is the mean over {} independent runs. ", o.seed,
                                         o.seed + o.seedCount - 1, o.seedCount)
                           : fmt::format("Seed {}. ", o.seed);
+    if (o.region.w > 0)
+        md += fmt::format("Errors over the region x = {}..{}, y = {}..{} only (`--region`). ", o.region.x,
+                          o.region.x + o.region.w - 1, o.region.y, o.region.y + o.region.h - 1);
     md += o.timeBudget > 0.0 ? fmt::format("Equal render time: {:g} s per method in {} doubling slices.\n\n",
                                            o.timeBudget, o.slices)
                              : "Equal sample counts per slice.\n\n";

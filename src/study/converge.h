@@ -29,6 +29,7 @@ struct ConvergeOptions {
     std::vector<uint64_t> sppList;    // or: measure after each of these total sample counts
     uint32_t seed = 1;
     uint32_t seedCount = 1;           // independent runs per method: seeds seed, seed + 1, ...
+    PixelRegion region;               // errors over these pixels only (w = 0: all); also the strip's crop
     std::string outDir;
     std::function<void(const std::string&)> log;  // progress lines (may be empty)
 };

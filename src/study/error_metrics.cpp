@@ -1,5 +1,6 @@
 #include "study/error_metrics.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -7,13 +8,18 @@
 
 namespace telescope {
 
-ErrorMetrics compareToReference(const Film& film, const RgbImage& ref) {
+ErrorMetrics compareToReference(const Film& film, const RgbImage& ref, const PixelRegion& region) {
     if (ref.width != int(film.width()) || ref.height != int(film.height()) ||
         ref.pixels.size() != film.pixelCount() * 3)
         throw std::invalid_argument(fmt::format("reference is {}x{}, the render {}x{}", ref.width, ref.height,
                                                 film.width(), film.height()));
     double se = 0.0, rel = 0.0, err = 0.0, sumRef = 0.0;
+    size_t pixels = 0;
     for (size_t i = 0; i < film.pixelCount(); ++i) {
+        const int px = int(i % film.width()), py = int(i / film.width());
+        if (region.w > 0 && (px < region.x || px >= region.x + region.w || py < region.y || py >= region.y + region.h))
+            continue;
+        ++pixels;
         glm::dvec3 x = film.mean(shader::kChannelEstimate, i);
         for (int c = 0; c < 3; ++c) {
             double r = ref.pixels[i * 3 + c], d = x[c] - r;
@@ -23,7 +29,7 @@ ErrorMetrics compareToReference(const Film& film, const RgbImage& ref) {
             sumRef += r;
         }
     }
-    const double n = double(film.pixelCount()) * 3.0;
+    const double n = double(std::max<size_t>(pixels, 1)) * 3.0;
     ErrorMetrics m;
     m.rmse = std::sqrt(se / n);
     m.relMse = rel / n;

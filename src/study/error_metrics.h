@@ -18,8 +18,14 @@ struct ErrorMetrics {
 // Keeps near-black reference pixels from dominating the relative MSE (the usual 1e-2).
 constexpr double kRelMseEpsilon = 1e-2;
 
+// A rectangle of pixels; w = 0 means the whole image.
+struct PixelRegion {
+    int x = 0, y = 0, w = 0, h = 0;
+};
+
 // The reference must be an RGB image of the film's size. Throws std::invalid_argument otherwise.
-ErrorMetrics compareToReference(const Film& film, const RgbImage& reference);
+// Over the region's pixels only when one is given.
+ErrorMetrics compareToReference(const Film& film, const RgbImage& reference, const PixelRegion& region = {});
 
 // Least-squares slope of log(y) against log(x) over the points with x > 0 and y > 0 (NaN when
 // fewer than two such points).
