@@ -157,6 +157,10 @@ void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Cont
     j["resolution"] = {film.width(), film.height()};
     j["wall_seconds"] = stats.wallSeconds;
     j["setup_seconds"] = stats.setupSeconds;
+    j["setup"] = {{"scene_seconds", stats.sceneSeconds},
+                  {"upload_seconds", stats.uploadSeconds},
+                  {"pipeline_seconds", stats.pipelineSeconds},
+                  {"warm_up_seconds", stats.warmUpSeconds}};
     j["submits"] = stats.submits;
     j["paths_per_second"] = stats.wallSeconds > 0 ? paths / stats.wallSeconds : 0.0;
     if (stats.photonPaths > 0) {

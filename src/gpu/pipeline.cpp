@@ -4,8 +4,10 @@
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
+#include <unordered_map>
 
 #include <fmt/format.h>
+#include <spirv-tools/optimizer.hpp>
 
 #include "gpu/buffer.h"
 #include "gpu/context.h"
@@ -37,6 +39,40 @@ std::vector<uint32_t> readSpirv(const std::string& path) {
 }
 }  // namespace
 
+bool specialiseSpirv(const std::vector<uint32_t>& code, const std::vector<SpecConstant>& spec,
+                     std::vector<uint32_t>& out, std::string* error) {
+    out.clear();
+    std::unordered_map<uint32_t, std::vector<uint32_t>> values;
+    for (const auto& s : spec) values[s.id] = {s.value};  // bools: 0 false, else true
+    std::string messages;
+    spvtools::Optimizer opt(SPV_ENV_VULKAN_1_2);
+    opt.SetMessageConsumer([&](spv_message_level_t level, const char*, const spv_position_t&, const char* m) {
+        if (level <= SPV_MSG_ERROR) messages += std::string(m) + "\n";
+    });
+    // Constant propagation folds the branches on the frozen constants; only then can the dead
+    // branches, the functions only they called and the code feeding them go.
+    opt.RegisterPass(spvtools::CreateSetSpecConstantDefaultValuePass(values))
+        .RegisterPass(spvtools::CreateFreezeSpecConstantValuePass())
+        .RegisterPass(spvtools::CreateFoldSpecConstantOpAndCompositePass())
+        .RegisterPass(spvtools::CreateCCPPass())
+        .RegisterPass(spvtools::CreateDeadBranchElimPass())
+        .RegisterPass(spvtools::CreateEliminateDeadFunctionsPass())
+        .RegisterPass(spvtools::CreateAggressiveDCEPass());
+    spvtools::OptimizerOptions options;
+    options.set_run_validator(false);  // glslang's output; the validation layer checks the result
+    if (!opt.Run(code.data(), code.size(), &out, options) || out.empty()) {
+        out.clear();
+        if (error) *error = messages.empty() ? "the SPIR-V optimizer failed" : messages;
+        return false;
+    }
+    return true;
+}
+
+bool hostSpecialisation() {
+    const char* v = std::getenv("TELESCOPE_DRIVER_SPECIALISATION");
+    return !(v && *v && std::string(v) != "0");
+}
+
 // ---- ComputePipeline ----
 
 ComputePipeline::ComputePipeline(const Context& context, std::string shaderName, uint32_t bufferCount,
@@ -45,6 +81,15 @@ ComputePipeline::ComputePipeline(const Context& context, std::string shaderName,
     VkDevice device = context.device();
     try {
         auto code = readSpirv(shaderDirectory() + "/" + name_ + ".spv");
+        bool specialised = false;
+        if (!spec.empty() && hostSpecialisation()) {
+            std::vector<uint32_t> out;
+            // On failure the driver specialises the original module (slower to create, same code).
+            if (specialiseSpirv(code, spec, out)) {
+                code = std::move(out);
+                specialised = true;
+            }
+        }
         VkShaderModuleCreateInfo moduleInfo{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
         moduleInfo.codeSize = code.size() * 4;
         moduleInfo.pCode = code.data();
@@ -78,7 +123,7 @@ ComputePipeline::ComputePipeline(const Context& context, std::string shaderName,
         info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
         info.stage.module = module_;
         info.stage.pName = "main";
-        info.stage.pSpecializationInfo = entries.empty() ? nullptr : &specInfo;
+        info.stage.pSpecializationInfo = entries.empty() || specialised ? nullptr : &specInfo;
         info.layout = layout_;
         VK_CHECK(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_));
 

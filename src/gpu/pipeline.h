@@ -27,6 +27,19 @@ uint32_t specFloat(float f);
 // Directory holding the compiled .spv files: $TELESCOPE_SHADER_DIR, else the build tree's.
 std::string shaderDirectory();
 
+// The module with the specialisation constants' values frozen in and the code they make
+// unreachable removed (SPIRV-Tools: freeze, fold, constant propagation, dead branches, dead
+// functions, dead code). Lavapipe runs its NIR passes over the whole inlined module before it
+// folds specialisation constants, so handing it the specialised module cuts pipeline creation of
+// the path tracer from seconds to a tenth of a second (docs/BENCHMARKS.md). Returns false (and
+// leaves `out` empty) when the optimizer rejects the module; `error` then says why.
+bool specialiseSpirv(const std::vector<uint32_t>& code, const std::vector<SpecConstant>& spec,
+                     std::vector<uint32_t>& out, std::string* error = nullptr);
+
+// Whether ComputePipeline specialises SPIR-V on the host (default) or passes the constants to the
+// driver (TELESCOPE_DRIVER_SPECIALISATION=1, for A/B measurements).
+bool hostSpecialisation();
+
 class ComputePipeline {
 public:
     ComputePipeline(const Context& context, std::string shaderName, uint32_t bufferCount,

@@ -22,6 +22,8 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
         throw std::logic_error("the auto pmf must be resolved by a pilot (resolveAutoPmf) before rendering");
     gpuScene_ = buildGpuScene(scene);
     plan_ = makeRenderPlan(scene, gpuScene_.features);
+    stats_.sceneSeconds = secondsSince(start);
+    auto phase = Clock::now();
 
     // ---- Scene buffers ----
     auto makeBuffer = [&](const auto& v, const char* name) {
@@ -46,16 +48,21 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
     accum_ = gpu::Buffer(context, accumBytes, "accumulation");
     accum_.fill(0);
 
+    stats_.uploadSeconds = secondsSince(phase);
+    phase = Clock::now();
     const RenderBuffers buffers{&prims_, &nodes_, &materials_, &lights_, &accum_, &media_, &gridData_, &primMedia_};
     passes_ = usesPhotons(scene.integrator) ? makePhotonPasses(context, scene, plan_, buffers, seed)
                                             : makePathTracePasses(context, scene, plan_, buffers, seed);
     batch_ = std::make_unique<gpu::CommandBatch>(context, kMaxDispatchesPerBatch);
+    stats_.pipelineSeconds = secondsSince(phase);
+    phase = Clock::now();
 
     // Lavapipe compiles a pipeline at its first dispatch: empty dispatches (no samples) move that
     // cost into the setup time, out of the first batch's timing.
     batch_->begin();
     passes_->recordWarmUp(*batch_);
     batch_->submitAndWait();
+    stats_.warmUpSeconds = secondsSince(phase);
     stats_.setupSeconds = secondsSince(start);
 }
 
@@ -69,9 +76,13 @@ void Renderer::restartAtPilotLevel(uint32_t level) {
     passes_->setPilotLevel(level);
     accum_.fill(0);
     sampleIndex_ = 0;
-    const double setup = stats_.setupSeconds;
+    RenderStats kept = stats_;
     stats_ = RenderStats{};
-    stats_.setupSeconds = setup;
+    stats_.setupSeconds = kept.setupSeconds;
+    stats_.sceneSeconds = kept.sceneSeconds;
+    stats_.uploadSeconds = kept.uploadSeconds;
+    stats_.pipelineSeconds = kept.pipelineSeconds;
+    stats_.warmUpSeconds = kept.warmUpSeconds;
 }
 
 void Renderer::render(const RenderRequest& request) {

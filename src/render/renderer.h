@@ -50,6 +50,9 @@ struct PassStats {
 struct RenderStats {
     double wallSeconds = 0.0;
     double setupSeconds = 0.0;  // scene upload and pipeline creation
+    // The setup's parts: BVH and GPU scene build, buffer upload, pipeline creation (SPIR-V to the
+    // driver's IR), and the warm-up dispatches (lavapipe compiles a pipeline at its first dispatch).
+    double sceneSeconds = 0.0, uploadSeconds = 0.0, pipelineSeconds = 0.0, warmUpSeconds = 0.0;
     uint64_t samplesPerPixel = 0;
     uint64_t submits = 0;
     uint64_t photonPaths = 0;    // photon mapping: photon paths traced, all passes
