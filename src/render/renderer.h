@@ -76,6 +76,9 @@ public:
     void restartAtPilotLevel(uint32_t level);
     const RenderStats& stats() const { return stats_; }
     uint32_t seed() const { return seed_; }
+    // The accumulation on the device (layout: shared/gpu_types.h), for passes that display it
+    // while the render runs; samples in it: stats().samplesPerPixel.
+    const gpu::Buffer& accumulation() const { return accum_; }
 
 private:
     gpu::Context& context_;
