@@ -110,6 +110,7 @@ void Presenter::createSwapchain(VkExtent2D windowSize) {
     VkDevice device = context_.device();
     vkDeviceWaitIdle(device);
     destroySwapchainResources();
+    requested_ = windowSize;
 
     VkSurfaceCapabilitiesKHR caps;
     VK_CHECK(vkGetPhysicalDeviceSurfaceCapabilitiesKHR(context_.physicalDevice(), surface_, &caps));
@@ -162,7 +163,7 @@ bool Presenter::present(shader::ViewPush push, VkDeviceAddress accumAddress, VkE
                         std::vector<uint8_t>* capture) {
     const auto start = std::chrono::steady_clock::now();
     VkDevice device = context_.device();
-    if (windowSize.width != extent_.width || windowSize.height != extent_.height || !swapchain_ || images_.empty()) {
+    if (windowSize.width != requested_.width || windowSize.height != requested_.height || images_.empty()) {
         createSwapchain(windowSize);
         return false;
     }

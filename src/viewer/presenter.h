@@ -49,7 +49,8 @@ private:
     VkSwapchainKHR swapchain_ = VK_NULL_HANDLE;
     VkSurfaceFormatKHR format_{};
     uint32_t flags_ = 0;  // kViewFlag*
-    VkExtent2D extent_{};
+    VkExtent2D extent_{};     // of the swapchain images
+    VkExtent2D requested_{};  // the window size the swapchain was made for
     std::vector<VkImage> images_;
     std::vector<VkSemaphore> renderDone_;  // one per swapchain image
     VkSemaphore acquired_ = VK_NULL_HANDLE;

@@ -135,56 +135,74 @@ public:
                 restart(true);
                 cameraMoved_ = false;
             }
-            renderBatch();
+            const auto frameStart = Clock::now();
+            const bool rendered = renderBatch();
             autoFit();
             show(nullptr);
+            if (rendered) frameSeconds_.push_back(secondsSince(frameStart));
             const std::string status = statusLine();
             window_.setTitle(fmt::format("telescope view - {} - {}", fs::path(scene_->path).filename().string(), status));
             if (options_.frames && !quiet_) fmt::print("frame {}: {}\n", frame_, status);
         }
-        if (!options_.screenshot.empty()) {
-            std::vector<uint8_t> pixels;
-            bool shown = false;
-            for (int attempt = 0; attempt < 4 && !shown; ++attempt) shown = show(&pixels);
-            if (!shown) throw std::runtime_error("view: the window could not be presented for the screenshot");
-            const VkExtent2D e = presenter_->extent();
-            writeScreenshotPng(options_.screenshot, e.width, e.height, pixels);
-            if (!quiet_) fmt::print(stderr, "wrote {} ({}x{}, {}, {} spp)\n", options_.screenshot, e.width, e.height,
-                                    channelName(channel_), samples());
+        if (!options_.screenshot.empty()) screenshot(options_.screenshot);
+        if (!quiet_) {
+            // Frames that rendered samples: batch + display pass + present.
+            std::string times;
+            if (!frameSeconds_.empty()) {
+                std::vector<double> t = frameSeconds_;
+                std::sort(t.begin(), t.end());
+                times = fmt::format(", rendering frames {:.1f} ms median, {:.1f} ms max", 1e3 * t[t.size() / 2], 1e3 * t.back());
+            }
+            fmt::print(stderr, "view: {} frames, {} spp{}{}\n", frame_, samples(), times,
+                       gStopRequested ? " (interrupted)" : "");
         }
-        if (!quiet_)
-            fmt::print(stderr, "view: {} frames, {} spp{}\n", frame_, samples(), gStopRequested ? " (interrupted)" : "");
         return 0;
     }
 
 private:
+    // Presents the current film again and writes what the swapchain image holds.
+    void screenshot(const std::string& path) {
+        std::vector<uint8_t> pixels;
+        bool shown = false;
+        for (int attempt = 0; attempt < 4 && !shown; ++attempt) shown = show(&pixels);
+        if (!shown) throw std::runtime_error("view: the window could not be presented for the screenshot");
+        const VkExtent2D e = presenter_->extent();
+        writeScreenshotPng(path, e.width, e.height, pixels);
+        if (!quiet_)
+            fmt::print(stderr, "view: wrote {} ({}x{}, {}, {} spp)\n", path, e.width, e.height, channelName(channel_),
+                       samples());
+    }
+
     uint64_t samples() const { return renderer_->stats().samplesPerPixel; }
     bool done() const { return options_.spp && samples() >= options_.spp; }
 
-    // A fresh Renderer for the current camera: accumulation starts again (an unbiased render
-    // never mixes samples from two cameras). The scene document carries the camera, so a saved
-    // EXR's metadata renders the same image with `telescope render`.
+    // Accumulation starts again for the current camera (an unbiased render never mixes samples
+    // from two cameras): the Renderer changes its camera in place when the integrator can, else a
+    // new Renderer is built. The scene document carries the camera, so a saved EXR's metadata
+    // renders the same image with `telescope render`.
     void restart(bool cameraChanged) {
-        auto scene = std::make_unique<Scene>(sceneAsLoaded_);
-        if (cameraChanged || moved_) {
-            scene->camera = camera_.apply(sceneAsLoaded_.camera);
-            scene->document["camera"]["transform"] = camera_.transformJson();
-            moved_ = true;
+        moved_ = moved_ || cameraChanged;
+        const Camera camera = moved_ ? camera_.apply(sceneAsLoaded_.camera) : sceneAsLoaded_.camera;
+        const auto start = Clock::now();
+        bool inPlace = renderer_ && renderer_->restartWithCamera(camera);
+        if (!inPlace) {
+            renderer_.reset();
+            scene_ = std::make_unique<Scene>(sceneAsLoaded_);
         }
-        renderer_.reset();
-        scene_ = std::move(scene);
-        renderer_ = std::make_unique<Renderer>(context_, *scene_, options_.seed);
+        scene_->camera = camera;
+        if (moved_) scene_->document["camera"]["transform"] = camera_.transformJson();
+        if (!inPlace) renderer_ = std::make_unique<Renderer>(context_, *scene_, options_.seed);
         restartTime_ = Clock::now();
         renderSeconds_ = 0.0;
         batchSpp_ = 1;
         if (!quiet_ && frame_ > 0)
-            fmt::print(stderr, "view: restarted{} (setup {:.0f} ms)\n", cameraChanged ? " for the new camera" : "",
-                       renderer_->stats().setupSeconds * 1e3);
+            fmt::print(stderr, "view: restarted{} ({}, {:.0f} ms)\n", cameraChanged ? " for the new camera" : "",
+                       inPlace ? "same pipelines" : "new renderer", secondsSince(start) * 1e3);
     }
 
     // ---- One batch of samples, sized so a frame takes about kFrameBudgetSeconds ----
-    void renderBatch() {
-        if (paused_ || done()) return;
+    bool renderBatch() {
+        if (paused_ || done()) return false;
         uint64_t n = batchSpp_;
         if (options_.spp) n = std::min<uint64_t>(n, options_.spp - samples());
         RenderRequest request;
@@ -196,6 +214,7 @@ private:
         const double perSample = seconds / double(n);
         const double fit = perSample > 0.0 ? kFrameBudgetSeconds / perSample : double(kMaxBatchSpp);
         batchSpp_ = uint32_t(std::clamp(std::floor(fit), 1.0, std::min(2.0 * double(batchSpp_), double(kMaxBatchSpp))));
+        return true;
     }
 
     // The false-colour channels fit their scale once, when first shown with samples.
@@ -240,6 +259,15 @@ private:
     // ---- Input ----
     void injectInput(const std::string& token) {
         auto number = [&](const std::string& s) { return std::stod(s); };
+        if (token == "shot") {
+            screenshot(fmt::format("{}-{}.png", (fs::path(options_.screenshot).parent_path() /
+                                                  fs::path(options_.screenshot).stem()).string(), frame_));
+            return;
+        }
+        if (token == "interrupt") {
+            raise(SIGINT);  // the handler Ctrl-C reaches
+            return;
+        }
         if (token.rfind("drag:", 0) == 0 || token.rfind("pan:", 0) == 0) {
             const bool pan = token[0] == 'p';
             const auto rest = token.substr(pan ? 4 : 5);
@@ -353,6 +381,7 @@ private:
     uint32_t batchSpp_ = 1;
     Clock::time_point restartTime_ = Clock::now();
     double renderSeconds_ = 0.0;
+    std::vector<double> frameSeconds_;
 };
 
 }  // namespace
@@ -390,7 +419,9 @@ std::vector<ScriptedInput> parseInputScript(const std::string& text) {
             throw bad("the frame must be a positive integer");
         }
         const bool pointer = s.token.rfind("drag:", 0) == 0 || s.token.rfind("pan:", 0) == 0;
-        if (pointer || s.token.rfind("scroll:", 0) == 0) {
+        if (s.token == "shot" || s.token == "interrupt") {
+            // scripting only: a screenshot now (needs --screenshot), SIGINT to the viewer itself
+        } else if (pointer || s.token.rfind("scroll:", 0) == 0) {
             std::string args = s.token.substr(s.token.find(':') + 1);
             const size_t colon = args.find(':');
             if (pointer == (colon == std::string::npos)) throw bad(pointer ? "expected drag:DX:DY or pan:DX:DY" : "expected scroll:N");
@@ -428,7 +459,9 @@ int runView(const cli::CommonOptions& common, const ViewOptions& optionsIn) {
     if (o.output.exrPath.empty()) o.output.exrPath = fs::path(common.scenePath).stem().string() + "-view.exr";
     cli::checkImageOutputs(o.output);
     if (!o.screenshot.empty()) cli::checkOutputPath(o.screenshot, "--screenshot", ".png");
-    parseInputScript(o.keys);
+    for (const auto& s : parseInputScript(o.keys))
+        if (s.token == "shot" && o.screenshot.empty())
+            throw InputError("", "--keys", "'shot' writes next to the --screenshot file: give --screenshot");
     cli::reportIgnoredKeys(scene, common.quiet);
 
     // ---- Window, then a device that presents to it ----

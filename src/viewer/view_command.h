@@ -24,7 +24,10 @@ struct ViewOptions {
 // A scripted input event: at the start of frame `frame` (1-based), before it renders.
 struct ScriptedInput {
     uint64_t frame = 0;
-    std::string token;  // a key ("s", "3", "Left", "shift+Left"), or drag:DX:DY, pan:DX:DY, scroll:N
+    // A key ("s", "3", "Left", "shift+Left"); drag:DX:DY, pan:DX:DY (mouse drags in pixels),
+    // scroll:N; "shot" (a screenshot now, to SHOT-FRAME.png for --screenshot SHOT.png);
+    // "interrupt" (raises SIGINT, as Ctrl-C does).
+    std::string token;
 };
 
 // Parses --keys; throws InputError naming --keys on a malformed entry or an unknown key.
