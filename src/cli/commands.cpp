@@ -1,6 +1,7 @@
 #include <OpenImageIO/imageio.h>  // before anything that may pull in X11
 
 #include "cli/commands.h"
+#include "cli/outputs.h"
 
 #include <unistd.h>
 
@@ -37,6 +38,10 @@ Scene loadWithOverrides(const CommonOptions& o, const std::vector<SceneOverride>
     overrides.insert(overrides.end(), extra.begin(), extra.end());
     return loadScene(o.scenePath, overrides);
 }
+
+}  // namespace
+
+// ---- Shared with the viewer (cli/outputs.h) ----
 
 void reportIgnoredKeys(const Scene& scene, bool quiet) {
     if (quiet) return;
@@ -111,12 +116,6 @@ void checkValidation(const gpu::Context& context) {
             fmt::format("{} Vulkan validation message(s) were reported", context.validationMessageCount()));
 }
 
-struct OutputInfo {
-    std::string sceneFile, sceneDocument, estimator, device;
-    uint32_t seed = 0;
-    double seconds = 0.0;
-};
-
 void writeImages(const ImageOutputOptions& o, const Film& film, const OutputInfo& info) {
     ImageMetadata meta;
     meta.entries = {
@@ -135,6 +134,8 @@ void writeImages(const ImageOutputOptions& o, const Film& film, const OutputInfo
     if (!o.checkpointPath.empty())
         saveCheckpoint(o.checkpointPath, Checkpoint{film, info.seed, info.sceneDocument, info.estimator});
 }
+
+namespace {
 
 // A checkpoint must belong to this scene (after overrides) and seed.
 void checkResumable(const Checkpoint& c, const std::string& path, const Scene& scene, uint32_t seed) {

@@ -6,6 +6,7 @@
 //   telescope merge A.checkpoint B.checkpoint ... -o OUT.exr            independent renders
 //   telescope converge SCENE --reference REF.exr --methods A,B (--time T | --spp LIST) -o DIR
 //   telescope plan SCENE [--set key=value ...]
+//   telescope view SCENE [--set key=value ...] [-o SAVE.exr] [--spp N]   interactive (GLFW window)
 //   telescope study transmittance -o DIR [--samples N] [--level K]    the 1-D transmittance study
 //   telescope devices
 //
@@ -18,6 +19,7 @@
 #include "cli/commands.h"
 #include "core/error.h"
 #include "study/methods.h"
+#include "viewer/view_command.h"
 
 using namespace telescope;
 using namespace telescope::cli;
@@ -117,6 +119,26 @@ int main(int argc, char** argv) {
     studyTr->add_option("--level", studyOptions.level, "Ray-marching level k (2^k points) and debiased base (default 1)");
     studyTr->add_option("--seed", studyOptions.seed, "Random seed");
 
+    // ---- view: the interactive front end (src/viewer) ----
+    viewer::ViewOptions viewOptions;
+    auto* view = app.add_subcommand("view", "Render progressively in a window (GLFW; X11 or xvfb-run): estimate, base, "
+                                            "correction, its parts and the standard error on keys");
+    addCommon(view);
+    view->add_option("-o,--output", viewOptions.output.exrPath, "Where the save key (s) writes (default: SCENE-view.exr)");
+    view->add_option("--png", viewOptions.output.pngPath, "PNG preview written with it (default: OUT with .png)");
+    view->add_flag("--no-png", viewOptions.output.noPng, "Save no PNG preview");
+    view->add_option("--seed", viewOptions.seed, "Random seed");
+    view->add_option("--spp", viewOptions.spp, "Stop adding samples at this count (default: never)")
+        ->check(CLI::PositiveNumber);
+    view->add_option("--channel", viewOptions.channel,
+                     "Channel shown first: estimate, base, correction, correction_positive, correction_negative, "
+                     "standard_error");
+    view->add_option("--frames", viewOptions.frames, "Scripting: exit after this many frames")->check(CLI::PositiveNumber);
+    view->add_option("--screenshot", viewOptions.screenshot, "Scripting: PNG of the window as last presented, on exit");
+    view->add_option("--keys", viewOptions.keys,
+                     "Scripting: input events KEY@FRAME,... (keys as named in the README; drag:DX:DY, pan:DX:DY, "
+                     "scroll:N)");
+
     // ---- plan, devices ----
     auto* plan = app.add_subcommand("plan", "Print the passes a render of the scene would run, and why");
     addCommon(plan);
@@ -140,6 +162,7 @@ int main(int argc, char** argv) {
         if (merge->parsed()) return runMerge(mergeOptions);
         if (converge->parsed()) return runConverge(common, convergeOptions);
         if (plan->parsed()) return runPlan(common);
+        if (view->parsed()) return viewer::runView(common, viewOptions);
         if (studyTr->parsed()) return runStudyTransmittance(common, studyOptions);
         return runDevices();
     } catch (const InputError& e) {

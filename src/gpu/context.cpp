@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "gpu/vk_check.h"
 
@@ -36,7 +37,7 @@ bool layerAvailable(const char* name) {
 }
 
 // Instance creation shared by listDevices() and Context.
-VkInstance createInstance(bool validation) {
+VkInstance createInstance(bool validation, const std::vector<std::string>& extraExtensions = {}) {
     VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
     app.pApplicationName = "telescope";
     app.apiVersion = VK_API_VERSION_1_2;
@@ -49,6 +50,7 @@ VkInstance createInstance(bool validation) {
         layers.push_back(kValidationLayer);
         extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
     }
+    for (const auto& e : extraExtensions) extensions.push_back(e.c_str());
     VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
     info.pApplicationInfo = &app;
     info.enabledLayerCount = uint32_t(layers.size());
@@ -57,6 +59,9 @@ VkInstance createInstance(bool validation) {
     info.ppEnabledExtensionNames = extensions.data();
     VkInstance instance = VK_NULL_HANDLE;
     VkResult r = vkCreateInstance(&info, nullptr, &instance);
+    if (r == VK_ERROR_EXTENSION_NOT_PRESENT && !extraExtensions.empty())
+        throw std::runtime_error(fmt::format("the Vulkan driver lacks an instance extension needed here ({})",
+                                             fmt::join(extraExtensions, ", ")));
     if (r == VK_ERROR_INCOMPATIBLE_DRIVER)
         throw std::runtime_error("no Vulkan 1.2 driver found (Debian: apt-get install mesa-vulkan-drivers)");
     VK_CHECK(r);
@@ -105,6 +110,21 @@ DeviceInfo describe(VkPhysicalDevice pd, uint32_t index) {
     return d;
 }
 
+// The first of `wanted` the device does not support, or "" when it supports them all.
+std::string missingDeviceExtension(VkPhysicalDevice pd, const std::vector<std::string>& wanted) {
+    if (wanted.empty()) return "";
+    uint32_t count = 0;
+    VK_CHECK(vkEnumerateDeviceExtensionProperties(pd, nullptr, &count, nullptr));
+    std::vector<VkExtensionProperties> present(count);
+    VK_CHECK(vkEnumerateDeviceExtensionProperties(pd, nullptr, &count, present.data()));
+    for (const auto& w : wanted) {
+        bool found = false;
+        for (const auto& p : present) found = found || w == p.extensionName;
+        if (!found) return w;
+    }
+    return "";
+}
+
 }  // namespace
 
 bool validationRequestedByEnvironment() {
@@ -128,7 +148,7 @@ std::vector<DeviceInfo> Context::listDevices() {
 
 Context::Context(const ContextOptions& options) {
     bool validation = options.validation || validationRequestedByEnvironment();
-    instance_ = createInstance(validation);
+    instance_ = createInstance(validation, options.instanceExtensions);
     try {
         // ---- Validation messenger: warnings and errors are counted and printed ----
         if (validation) {
@@ -154,6 +174,9 @@ Context::Context(const ContextOptions& options) {
                 throw std::runtime_error(fmt::format("--device {}: only {} Vulkan device(s) present",
                                                      options.deviceIndex, devices.size()));
             DeviceInfo d = describe(devices[options.deviceIndex], options.deviceIndex);
+            if (d.suitable && !missingDeviceExtension(devices[options.deviceIndex], options.deviceExtensions).empty())
+                d.whyNot = "no " + missingDeviceExtension(devices[options.deviceIndex], options.deviceExtensions);
+            d.suitable = d.whyNot.empty();
             if (!d.suitable)
                 throw std::runtime_error(fmt::format("device {} ({}) cannot run Telescope: {}",
                                                      d.index, d.name, d.whyNot));
@@ -163,9 +186,14 @@ Context::Context(const ContextOptions& options) {
                 for (uint32_t i = 0; i < devices.size() && chosen < 0; ++i) {
                     DeviceInfo d = describe(devices[i], i);
                     bool gpu = d.type == "discrete GPU" || d.type == "integrated GPU";
-                    if (d.suitable && (pass == 1 || gpu)) chosen = int(i);
+                    bool extensions = missingDeviceExtension(devices[i], options.deviceExtensions).empty();
+                    if (d.suitable && extensions && (pass == 1 || gpu)) chosen = int(i);
                 }
-            if (chosen < 0) throw std::runtime_error("no Vulkan 1.2 device with compute and buffer device address");
+            if (chosen < 0)
+                throw std::runtime_error(options.deviceExtensions.empty()
+                                             ? "no Vulkan 1.2 device with compute and buffer device address"
+                                             : fmt::format("no Vulkan 1.2 device with compute, buffer device address and {}",
+                                                           fmt::join(options.deviceExtensions, ", ")));
         }
         physicalDevice_ = devices[chosen];
         info_ = describe(physicalDevice_, uint32_t(chosen));
@@ -195,6 +223,10 @@ Context::Context(const ContextOptions& options) {
         deviceInfo.pNext = &features;
         deviceInfo.queueCreateInfoCount = 1;
         deviceInfo.pQueueCreateInfos = &queueInfo;
+        std::vector<const char*> deviceExtensions;
+        for (const auto& e : options.deviceExtensions) deviceExtensions.push_back(e.c_str());
+        deviceInfo.enabledExtensionCount = uint32_t(deviceExtensions.size());
+        deviceInfo.ppEnabledExtensionNames = deviceExtensions.data();
         VK_CHECK(vkCreateDevice(physicalDevice_, &deviceInfo, nullptr, &device_));
         vkGetDeviceQueue(device_, queueFamily_, 0, &queue_);
 

@@ -31,6 +31,10 @@ struct ContextOptions {
     int deviceIndex = -1;
     // Enables VK_LAYER_KHRONOS_validation; also on when TELESCOPE_VALIDATION=1.
     bool validation = false;
+    // Extra extensions, for presenting to a window (the viewer): none for headless work. A device
+    // without every device extension is not chosen.
+    std::vector<std::string> instanceExtensions;
+    std::vector<std::string> deviceExtensions;
 };
 
 class Context {

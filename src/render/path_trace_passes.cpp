@@ -156,6 +156,15 @@ public:
         if (plan.levelSchedule == LevelSchedule::Queued) makeLevelQueue(context, plan, pixels * samplesPerUnit_);
     }
 
+    bool setCamera(const Camera& cam) override {
+        push_.cameraPosition = cam.position;
+        push_.cameraRight = cam.right;
+        push_.cameraUp = cam.up;
+        push_.cameraForward = cam.forward;
+        push_.planeDistance = 1.0f / std::tan(0.5f * glm::radians(cam.fovDegrees));
+        return true;
+    }
+
     uint32_t samplesPerUnit() const override { return samplesPerUnit_; }
     // A CommandBatch holds 64 dispatches x the passes of the integrator (see Renderer).
     uint32_t maxUnitsPerBatch() const override { return levelCount_ ? 12 : 64; }

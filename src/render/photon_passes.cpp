@@ -194,6 +194,15 @@ public:
         gatherPush_.levelCap = levels.cap;
     }
 
+    bool setCamera(const Camera& cam) override {
+        gatherPush_.cameraPosition = cam.position;
+        gatherPush_.cameraRight = cam.right;
+        gatherPush_.cameraUp = cam.up;
+        gatherPush_.cameraForward = cam.forward;
+        gatherPush_.planeDistance = 1.0f / std::tan(0.5f * glm::radians(cam.fovDegrees));
+        return true;
+    }
+
     uint32_t samplesPerUnit() const override { return 1; }
     uint32_t maxUnitsPerBatch() const override { return 1; }
     uint32_t dispatchesPerUnit() const override { return 16 + slices_; }

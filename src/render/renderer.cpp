@@ -85,6 +85,20 @@ void Renderer::restartAtPilotLevel(uint32_t level) {
     stats_.warmUpSeconds = kept.warmUpSeconds;
 }
 
+bool Renderer::restartWithCamera(const Camera& camera) {
+    const Camera& cam = scene_.camera;
+    if (camera.width != cam.width || camera.height != cam.height || camera.fovDegrees != cam.fovDegrees ||
+        camera.medium != cam.medium || camera.filter != cam.filter)
+        throw std::invalid_argument("Renderer::restartWithCamera: only the position and orientation may change");
+    if (!passes_->setCamera(camera)) return false;
+    accum_.fill(0);
+    sampleIndex_ = 0;
+    const double setup = stats_.setupSeconds;
+    stats_ = RenderStats{};
+    stats_.setupSeconds = setup;
+    return true;
+}
+
 void Renderer::render(const RenderRequest& request) {
     const Camera& cam = scene_.camera;
     const uint32_t perUnit = passes_->samplesPerUnit();

@@ -78,8 +78,16 @@ public:
     // film at another fixed level, with the same pipelines and the same random numbers (sample
     // indices restart at 0). Stats restart too, except the setup time.
     void restartAtPilotLevel(uint32_t level);
+    // Starts again from an empty film with another camera of the same resolution and field of
+    // view (the viewer's orbit): sample indices restart at 0 and stats restart, except the setup
+    // time. No new pipelines. Returns false (and changes nothing) when the integrator cannot
+    // change its camera in place.
+    bool restartWithCamera(const Camera& camera);
     const RenderStats& stats() const { return stats_; }
     uint32_t seed() const { return seed_; }
+    // The accumulation on the device (layout: shared/gpu_types.h), for passes that display it
+    // while the render runs; samples in it: stats().samplesPerPixel.
+    const gpu::Buffer& accumulation() const { return accum_; }
 
 private:
     gpu::Context& context_;

@@ -58,6 +58,9 @@ public:
     // The pmf pilot's fixed level (a push constant of a pilot plan); integrators without a pilot
     // throw std::logic_error.
     virtual void setPilotLevel(uint32_t level);
+    // Points the camera passes at another camera of the same resolution (a push constant: no new
+    // pipelines). Returns false when the integrator cannot, so the caller builds a new Renderer.
+    virtual bool setCamera(const Camera&) { return false; }
 };
 
 std::unique_ptr<SamplePasses> makePathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan,

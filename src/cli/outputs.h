@@ -1,0 +1,35 @@
+// Pieces of the render command that the viewer shares: the Vulkan context options, output path
+// checks, and the EXR (with its metadata), PNG and checkpoint a render writes.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "cli/commands.h"
+#include "gpu/context.h"
+#include "render/film.h"
+#include "scene/scene.h"
+
+namespace telescope::cli {
+
+void reportIgnoredKeys(const Scene& scene, bool quiet);
+gpu::ContextOptions contextOptions(const CommonOptions& o);
+
+// Throw InputError naming the option when a path has the wrong extension or no directory.
+void checkOutputPath(const std::string& path, const char* option, const char* extension);
+void checkImageOutputs(ImageOutputOptions& o);  // fills in the default PNG path
+
+// Throws when the validation layer reported anything.
+void checkValidation(const gpu::Context& context);
+
+struct OutputInfo {
+    std::string sceneFile, sceneDocument, estimator, device;
+    uint32_t seed = 0;
+    double seconds = 0.0;
+};
+
+// The EXR (estimate, base, correction and its parts, variance; metadata: scene, seed, spp,
+// device, timings), the PNG preview and the checkpoint, as `telescope render` writes them.
+void writeImages(const ImageOutputOptions& o, const Film& film, const OutputInfo& info);
+
+}  // namespace telescope::cli
