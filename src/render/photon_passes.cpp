@@ -200,6 +200,8 @@ public:
         gatherPush_.cameraUp = cam.up;
         gatherPush_.cameraForward = cam.forward;
         gatherPush_.planeDistance = 1.0f / std::tan(0.5f * glm::radians(cam.fovDegrees));
+        passInBlock_ = 0;  // blocks of the old camera are dropped, never mixed into the new one
+        blockBuffer_.fill(0);
         return true;
     }
 
