@@ -21,6 +21,16 @@ std::vector<RegionMean> blockMeans(const Film& film, uint32_t block, uint32_t ch
     return out;
 }
 
+RegionMean imageMean(const Film& film, uint32_t channel) {
+    RegionMean r;
+    const double n = double(film.pixelCount());
+    for (size_t i = 0; i < film.pixelCount(); ++i) {
+        r.mean += film.mean(channel, i) / n;
+        r.variance += film.varianceOfMean(i) / (n * n);
+    }
+    return r;
+}
+
 namespace {
 // Inverse of the standard normal upper tail by bisection on erfc (accurate and dependency-free).
 double normalUpperQuantile(double p) {
@@ -46,6 +56,51 @@ void record(ZSummary& s, double z, double threshold, size_t region, int channel)
 double sidakThreshold(double alpha, size_t tests) {
     double perTest = 1.0 - std::pow(1.0 - alpha, 1.0 / double(tests));
     return normalUpperQuantile(perTest / 2.0);
+}
+
+namespace {
+// Upper tail of Student's t with nu degrees of freedom: P(T > t) = I_{nu/(nu+t^2)}(nu/2, 1/2) / 2,
+// the incomplete beta integral taken by Simpson's rule in the substitution x = s^2 (smooth).
+double studentUpperTail(double t, double nu) {
+    const double xMax = nu / (nu + t * t);
+    // I_x(a, 1/2) with x = s^2: integrand 2 s^(2a-1) (1 - s^2)^(-1/2), smooth on [0, sqrt(xMax)] < 1.
+    auto integral = [nu](double sMax) {
+        const int n = 4000;
+        const double h = sMax / n, a = 0.5 * nu;
+        auto f = [a](double s) { return s <= 0.0 ? (a == 0.5 ? 2.0 : 0.0) : 2.0 * std::pow(s, 2.0 * a - 1.0) / std::sqrt(1.0 - s * s); };
+        double sum = f(0.0) + f(sMax);
+        for (int i = 1; i < n; ++i) sum += (i % 2 ? 4.0 : 2.0) * f(i * h);
+        return sum * h / 3.0;
+    };
+    const double beta = std::exp(std::lgamma(0.5 * nu) + std::lgamma(0.5) - std::lgamma(0.5 * nu + 0.5));
+    return 0.5 * integral(std::sqrt(xMax)) / beta;
+}
+}  // namespace
+
+double sidakThresholdT(double alpha, size_t tests, double dof) {
+    const double perTest = 1.0 - std::pow(1.0 - alpha, 1.0 / double(tests));
+    double lo = 0.0, hi = 1e3;
+    for (int i = 0; i < 100; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (studentUpperTail(mid, dof) > perTest / 2.0 ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+ZSummary compareBlocksAndImage(const Film& film, const std::vector<RegionMean>& referenceBlocks,
+                               const RegionMean& referenceImage, uint32_t block, double alpha) {
+    const std::vector<RegionMean> blocks = blockMeans(film, block);
+    const double threshold = sidakThreshold(alpha, (blocks.size() + 1) * 3);
+    ZSummary z = compareRegions(blocks, referenceBlocks, threshold);
+    const ZSummary whole = compareRegions({imageMean(film)}, {referenceImage}, threshold);
+    z.tests += whole.tests;
+    z.failing += whole.failing;
+    if (whole.maxAbsZ > z.maxAbsZ) {
+        z.maxAbsZ = whole.maxAbsZ;
+        z.worst = "image mean " + whole.worst.substr(whole.worst.find("channel"));
+    }
+    z.threshold = threshold;
+    return z;
 }
 
 ZSummary compareRegions(const std::vector<RegionMean>& a, const std::vector<RegionMean>& b, double threshold) {
