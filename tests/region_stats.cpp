@@ -59,22 +59,34 @@ double sidakThreshold(double alpha, size_t tests) {
 }
 
 namespace {
-// Upper tail of Student's t with nu degrees of freedom: P(T > t) = I_{nu/(nu+t^2)}(nu/2, 1/2) / 2,
-// the incomplete beta integral taken by Simpson's rule in the substitution x = s^2 (smooth).
-double studentUpperTail(double t, double nu) {
-    const double xMax = nu / (nu + t * t);
-    // I_x(a, 1/2) with x = s^2: integrand 2 s^(2a-1) (1 - s^2)^(-1/2), smooth on [0, sqrt(xMax)] < 1.
-    auto integral = [nu](double sMax) {
-        const int n = 4000;
-        const double h = sMax / n, a = 0.5 * nu;
-        auto f = [a](double s) { return s <= 0.0 ? (a == 0.5 ? 2.0 : 0.0) : 2.0 * std::pow(s, 2.0 * a - 1.0) / std::sqrt(1.0 - s * s); };
-        double sum = f(0.0) + f(sMax);
-        for (int i = 1; i < n; ++i) sum += (i % 2 ? 4.0 : 2.0) * f(i * h);
-        return sum * h / 3.0;
-    };
-    const double beta = std::exp(std::lgamma(0.5 * nu) + std::lgamma(0.5) - std::lgamma(0.5 * nu + 0.5));
-    return 0.5 * integral(std::sqrt(xMax)) / beta;
+// Regularised incomplete beta I_x(a, b) by its continued fraction (modified Lentz), with the
+// symmetry I_x(a, b) = 1 - I_{1-x}(b, a) where the fraction converges slowly.
+double incompleteBeta(double a, double b, double x) {
+    if (x <= 0.0) return 0.0;
+    if (x >= 1.0) return 1.0;
+    if (x > (a + 1.0) / (a + b + 2.0)) return 1.0 - incompleteBeta(b, a, 1.0 - x);
+    const double tiny = 1e-300;
+    auto guard = [tiny](double v) { return std::abs(v) < tiny ? tiny : v; };
+    double c = 1.0, d = 1.0 / guard(1.0 - (a + b) * x / (a + 1.0)), h = d;
+    for (int m = 1; m <= 500; ++m) {
+        const double m2 = 2.0 * m;
+        double num = m * (b - m) * x / ((a - 1.0 + m2) * (a + m2));
+        d = 1.0 / guard(1.0 + num * d);
+        c = guard(1.0 + num / c);
+        h *= d * c;
+        num = -(a + m) * (a + b + m) * x / ((a + m2) * (a + 1.0 + m2));
+        d = 1.0 / guard(1.0 + num * d);
+        c = guard(1.0 + num / c);
+        const double step = d * c;
+        h *= step;
+        if (std::abs(step - 1.0) < 1e-15) break;
+    }
+    const double front = std::exp(std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x));
+    return front * h / a;
 }
+
+// Upper tail of Student's t with nu degrees of freedom: P(T > t) = I_{nu / (nu + t^2)}(nu / 2, 1 / 2) / 2.
+double studentUpperTail(double t, double nu) { return 0.5 * incompleteBeta(0.5 * nu, 0.5, nu / (nu + t * t)); }
 }  // namespace
 
 double sidakThresholdT(double alpha, size_t tests, double dof) {
