@@ -34,7 +34,7 @@ double filtered(uint type, const Fn& g) {
 
 // E_u[w(x) g(x)] for the sampler (or, for the control, tent offsets of radius 2 with weight 1).
 double sampled(uint type, const Fn& g, bool control = false) {
-    const int n = 1 << 22;
+    const int n = 1 << 20;
     double s = 0.0;
     for (int i = 0; i < n; ++i) {
         const float u = (float(i) + 0.5f) / float(n);
