@@ -77,7 +77,9 @@ PathState startSample(uvec2 pixel, uint pixelIndex, uint s, LevelPmf pmf, out Rn
             level = levelSample(pmf, rngNext(rng));  // level_queue.glsl drawLevel() repeats this draw
         }
     }
-    return beginPath(pc.cameraPosition, dir, level);
+    // Camera rays start kRayEpsilon out, like every other ray (traceClosest uses tMin = 0), so a
+    // camera placed on a surface sees what is in front of it rather than that surface's back.
+    return beginPath(pc.cameraPosition + dir * kRayEpsilon, dir, level);
 }
 
 #include "level_queue.glsl"
