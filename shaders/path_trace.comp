@@ -1,5 +1,5 @@
 // path_trace: one thread per pixel traces `sampleCount` paths and accumulates the estimate,
-// its square, the base I(k) and the correction (ESTIMATORS.md section 2).
+// its square, the base I(k) and the correction (docs/ESTIMATORS.md section 2).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -8,6 +8,7 @@
 #include "shared/rng.h"
 #include "shared/sampling.h"
 #include "shared/path_depth.h"
+#include "shared/pixel_filter.h"
 #include "accumulate.glsl"
 
 layout(local_size_x = kPathTraceGroupSize, local_size_y = kPathTraceGroupSize) in;
@@ -30,6 +31,7 @@ layout(constant_id = kSpecMaxTraceDepth) const uint kMaxTraceDepth = 4096u;
 layout(constant_id = kSpecRayEpsilon) const float kRayEpsilon = 1e-5;
 layout(constant_id = kSpecPilot) const bool kPilot = false;
 layout(constant_id = kSpecLevelSchedule) const uint kLevelSchedule = kLevelSchedulePerPixel;
+layout(constant_id = kSpecTestPmfWeight) const float kTestPmfWeight = 1.0;
 
 layout(std430, binding = kBindingPrims) readonly buffer PrimBuffer { Prim prims[]; };
 layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[]; };
@@ -44,6 +46,10 @@ layout(push_constant) uniform Push { PathTracePush pc; };
 #include "medium.glsl"
 #include "path_tracer.glsl"
 
+// The reconstruction-filter weight of the sample being traced (1 except for the wide filters of
+// shared/pixel_filter.h); it multiplies the sample's base and correction when the path ends.
+float gFilterWeight = 1.0;
+
 // Camera ray of sample s (Tungsten's pinhole: pixel (0,0) top-left, fov horizontal) and the
 // level drawn for it.
 PathState startSample(uvec2 pixel, uint pixelIndex, uint s, LevelPmf pmf, out Rng rng) {
@@ -51,6 +57,11 @@ PathState startSample(uvec2 pixel, uint pixelIndex, uint s, LevelPmf pmf, out Rn
     vec2 jitter = vec2(rngNext(rng), rngNext(rng));
     if (kFilter == kFilterTent) jitter = vec2(sampleTent(jitter.x), sampleTent(jitter.y)) + 0.5;
     else if (kFilter == kFilterDirac) jitter = vec2(0.5);
+    else if (isWideFilter(kFilter)) {
+        float wx, wy;
+        jitter = vec2(sampleWideFilter(kFilter, jitter.x, wx), sampleWideFilter(kFilter, jitter.y, wy)) + 0.5;
+        gFilterWeight = wx * wy;
+    }
     float w = float(pc.width);
     vec3 local = vec3(-1.0 + 2.0 * (float(pixel.x) + jitter.x) / w,
                       float(pc.height) / w - 2.0 * (float(pixel.y) + jitter.y) / w, pc.planeDistance);
@@ -66,7 +77,9 @@ PathState startSample(uvec2 pixel, uint pixelIndex, uint s, LevelPmf pmf, out Rn
             level = levelSample(pmf, rngNext(rng));  // level_queue.glsl drawLevel() repeats this draw
         }
     }
-    return beginPath(pc.cameraPosition, dir, level);
+    // Camera rays start kRayEpsilon out, like every other ray (traceClosest uses tMin = 0), so a
+    // camera placed on a surface sees what is in front of it rather than that surface's back.
+    return beginPath(pc.cameraPosition + dir * kRayEpsilon, dir, level);
 }
 
 #include "level_queue.glsl"
@@ -100,6 +113,7 @@ void queuedMain(LevelPmf pmf) {
     PathState path = startItem(item, pmf, rng);
     while (true) {
         if (pathStep(path, pmf, rng)) continue;
+        if (isWideFilter(kFilter)) path.result = PathResult(path.result.base * gFilterWeight, path.result.correction * gFilterWeight);
         vec3 z = path.result.base + path.result.correction;
         float bad = (any(isnan(z)) || any(isinf(z))) ? 1.0 : 0.0;
         results.v[2u * item] = vec4(path.result.base, bad);
@@ -133,6 +147,7 @@ void main() {
         if (kPilot) rays += 1.0;
         if (pathStep(path, pmf, rng)) continue;
         // ---- Path finished: accumulate, then start the next sample in the same lane ----
+        if (isWideFilter(kFilter)) path.result = PathResult(path.result.base * gFilterWeight, path.result.correction * gFilterWeight);
         vec3 z = kPilot ? path.result.correction : path.result.base + path.result.correction;
         if (any(isnan(z)) || any(isinf(z)) || any(isnan(path.result.base)) || any(isinf(path.result.base))) {
             dropped += 1.0;

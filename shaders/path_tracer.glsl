@@ -25,7 +25,7 @@ void addContribution(inout PathResult r, uint bounce, vec3 c, LevelPmf pmf, uint
         return;
     }
     float w = depthWeight(kDebiasMode, pmf, kMaxBounces, level, bounce);
-    if (w > 0.0) r.correction += c * w;
+    if (w > 0.0) r.correction += c * (w * kTestPmfWeight);
 }
 
 #include "scene_common.glsl"

@@ -1,11 +1,13 @@
 // The telescope command: exit codes, one-line messages naming the file and key, no output on bad
-// input, and the EXR it writes (channels, metadata, base + correction = estimate).
+// input, the EXR it writes (channels with known values, metadata with the settings as run), and
+// what `plan` says.
 #include <OpenImageIO/imageio.h>  // before anything that may pull in X11
 
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +15,8 @@
 #include <map>
 #include <sstream>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "render/image_output.h"
 #include "render_harness.h"
@@ -128,8 +132,12 @@ TEST_F(Cli, PlanListsOnlyThePathTracePass) {
 }
 
 TEST_F(Cli, RenderWritesExrWithChannelsMetadataAndPreview) {
+    // The furnace (Le = 1, albedo 0.5) at k = 1 with the default pmf: every channel has a known
+    // mean, I(1) = 1.5 in base.*, I - I(1) = 0.5 in correction.*, 2 in R, G, B (a swapped or
+    // misnamed channel fails), and the settings as run are in the metadata and the stats.
     std::string exr = out("cb.exr"), stats = out("stats.json");
-    CommandResult r = run("render " + scene() + " -o " + exr + " --spp 4 --seed 5 -q --stats-json " + stats +
+    CommandResult r = run("render " + test::sourcePath("scenes/furnace.json") + " -o " + exr +
+                          " --spp 8 --seed 5 -q --stats-json " + stats +
                           " --set camera.resolution=[32,24] --set integrator.max_bounces=1"
                           " --set 'integrator.debias={\"estimator\":\"single_term\"}'");
     ASSERT_EQ(r.exitCode, 0) << r.stderrText;
@@ -139,21 +147,68 @@ TEST_F(Cli, RenderWritesExrWithChannelsMetadataAndPreview) {
                                          "correction.B", "variance.R", "variance.G", "variance.B"});
     ASSERT_EQ(img.width, 32);
     ASSERT_EQ(img.height, 24);
-    double correction = 0.0;
-    for (int p = 0; p < img.width * img.height; ++p) {
-        const float* px = &img.pixels[p * 12];
-        for (int c = 0; c < 3; ++c) {
-            EXPECT_NEAR(px[3 + c] + px[6 + c], px[c], 1e-5f * (1.0f + std::abs(px[c])));
-            EXPECT_GE(px[9 + c], 0.0f);
-            correction += std::abs(px[6 + c]);
-        }
+    const int n = img.width * img.height;
+    double mean[12] = {};
+    for (int p = 0; p < n; ++p)
+        for (int c = 0; c < 12; ++c) mean[c] += img.pixels[p * 12 + c] / double(n);
+    for (int c = 0; c < 3; ++c) {
+        // The image mean's standard error from the variance channel: sqrt(mean variance / n).
+        const double se = std::sqrt(mean[9 + c] / n);
+        EXPECT_GT(se, 0.0);
+        EXPECT_LT(std::abs(mean[c] - 2.0), 4.5 * se) << "channel " << c << ": " << mean[c];
+        EXPECT_NEAR(mean[3 + c], 1.5, 0.05) << "base";
+        EXPECT_NEAR(mean[6 + c], 0.5, 0.05) << "correction";
     }
-    EXPECT_GT(correction, 0.0) << "a debiased render has a correction";
-    std::ifstream in(stats);
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    EXPECT_NE(text.find("\"path_trace\""), std::string::npos);
-    EXPECT_NE(text.find("\"dispatches\""), std::string::npos);
-    EXPECT_NE(text.find("\"device\""), std::string::npos);
+    auto in = OIIO::ImageInput::open(exr);
+    ASSERT_TRUE(in);
+    const nlohmann::json meta = nlohmann::json::parse(in->spec().get_string_attribute("telescope:settings"));
+    EXPECT_EQ(meta["integrator"]["debias"]["pmf"]["type"], "geometric");
+    EXPECT_FLOAT_EQ(meta["integrator"]["debias"]["pmf"]["r"].get<float>(), 0.25f);
+    EXPECT_NE(meta["integrator"]["debias"]["pmf"]["origin"].get<std::string>().find("default for path depth"), std::string::npos);
+    const nlohmann::json j = nlohmann::json::parse(std::ifstream(stats));
+    EXPECT_EQ(j["settings"], meta);
+    EXPECT_TRUE(j["passes"].contains("path_trace"));
+    EXPECT_GT(j["passes"]["path_trace"]["dispatches"].get<int>(), 0);
+    EXPECT_TRUE(j.contains("device"));
+}
+
+TEST_F(Cli, OutputsRecordThePmfTheAutoPilotChose) {
+    std::string exr = out("auto.exr"), stats = out("auto.json");
+    CommandResult r = run("render " + test::sourcePath("scenes/furnace.json") + " -o " + exr + " --no-png" +
+                          " --spp 2 -q --stats-json " + stats + " --set camera.resolution=[8,8] --set integrator.max_bounces=1"
+                          " --set 'integrator.debias={\"estimator\":\"single_term\",\"pmf\":{\"type\":\"auto\",\"pilot_spp\":1,\"pilot_levels\":3}}'");
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    const nlohmann::json j = nlohmann::json::parse(std::ifstream(stats));
+    const nlohmann::json& pmf = j["settings"]["integrator"]["debias"]["pmf"];
+    EXPECT_NE(pmf["type"], "auto") << pmf.dump();
+    EXPECT_NE(pmf["origin"].get<std::string>().find("auto pilot"), std::string::npos) << pmf.dump();
+    auto in = OIIO::ImageInput::open(exr);
+    ASSERT_TRUE(in);
+    EXPECT_EQ(nlohmann::json::parse(in->spec().get_string_attribute("telescope:settings")), j["settings"]);
+}
+
+TEST_F(Cli, PlanSaysWhichPmfAndWhy) {
+    auto plan = [&](const std::string& scenePath, const std::string& sets) {
+        std::string outFile = out("plan.txt");
+        int status = std::system((std::string(TELESCOPE_BINARY) + " plan " + scenePath + sets + " > " + outFile).c_str());
+        EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+        std::ifstream in(outFile);
+        return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    };
+    std::string text = plan(scene(), " --set 'integrator.debias={\"estimator\":\"sum\"}'");
+    EXPECT_NE(text.find("path-depth pmf: geometric pmf, r = 0.25; default for path depth"), std::string::npos) << text;
+    text = plan(scene(), " --set 'integrator.debias={\"estimator\":\"sum\",\"pmf\":{\"type\":\"power_law\"}}'");
+    EXPECT_NE(text.find("path-depth pmf: power-law pmf, alpha = 0.666667; given in the scene"), std::string::npos) << text;
+    text = plan(test::sourcePath("scenes/absorbing-slab.json"), "");
+    EXPECT_NE(text.find("transmittance pmf: geometric pmf, r = 0.65; "), std::string::npos) << text;
+    text = plan(scene(), " --set 'integrator.debias={\"estimator\":\"sum\",\"test_pmf_weight\":1.07}'");
+    EXPECT_NE(text.find("TEST ONLY"), std::string::npos) << text;
+}
+
+TEST_F(Cli, WideFilterWithPhotonMappingIsBadInput) {
+    expectBadInput("render " + test::sourcePath("scenes/point-plane-photon.json") + " -o " + out("a.exr") +
+                       " --set camera.reconstruction_filter=gaussian",
+                   {"point-plane-photon.json", "camera.reconstruction_filter", "gaussian"});
 }
 
 // ---- Checkpoints, resume and merge ----

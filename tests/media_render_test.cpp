@@ -1,13 +1,18 @@
-// Participating media on the device (ESTIMATORS.md sections 4 and 6).
+// Participating media on the device (docs/ESTIMATORS.md sections 4 and 6, docs/TESTING.md).
 //
 // Absorbing slab before an emitter (scenes/absorbing-slab.json): the top half of the frame looks
 // through a slab of constant density, the bottom half through Tungsten's exponential medium
 // falling off across the slab; with the dirac filter every pixel has one direction and the
 // closed form L = Le g(tau / cos). Every unbiased estimator matches it per 8x8 region within its
-// own statistical bound, for the exponential and the Davis model; biased marching at a small
-// level fails the same test. A constant grid renders like the homogeneous medium, and the Davis
-// cloud rendered with debiased marching agrees with a very-high-level marching reference where
-// low-level marching does not.
+// own statistical bound, for the exponential and the Davis model. Positive control at the level
+// the debiased estimators use: biased marching at their base level k = 1 (which is debiased
+// marching with its correction dropped, in expectation) fails the same test at the same spp.
+// A constant grid renders like the homogeneous medium, and the Davis cloud rendered with
+// debiased marching agrees with a very-high-level marching reference where marching at the base
+// level does not.
+//
+// Finite variance: every estimate here lies in [0, 1] except debiased marching's, whose
+// correction has E[D_j^2] ~ 4^-j for a smooth density against p(j) ~ 0.35^j (default r = 0.65).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,6 +21,7 @@
 #include "region_stats.h"
 #include "render_harness.h"
 #include "shared/transmittance.h"
+#include "slab_closed_form.h"
 
 using namespace telescope;
 using namespace telescope::test;
@@ -25,11 +31,6 @@ namespace {
 const char* kSlab = "scenes/absorbing-slab.json";
 constexpr uint32_t kBlock = 8;
 constexpr double kAlpha = 1e-3;
-
-// Optical depths along the slab normal (thickness 1): constant density 1.2; falloff
-// 3 exp(-3 (z + 1/2)) integrated over z in [-1/2, 1/2].
-const double kTauConstant = 1.2;
-const double kTauFalloff = 3.0 * (1.0 - std::exp(-3.0)) / 3.0;
 
 struct SlabModel {
     std::string json;       // the "transmittance" object of both media
@@ -47,32 +48,13 @@ Scene slabScene(const SlabModel& model, const std::string& estimator) {
                                  {"integrator.transmittance_estimator", estimator}});
 }
 
-// Closed form per pixel: the camera of absorbing-slab.json looks along +z, dirac filter.
-std::vector<RegionMean> slabClosedForm(const Scene& scene, const shader::TrModel& model) {
-    const Camera& cam = scene.camera;
-    const double w = cam.width, h = cam.height;
-    const double plane = 1.0 / std::tan(0.5 * cam.fovDegrees * 3.14159265358979323846 / 180.0);
-    Film film(cam.width, cam.height);
-    film.setSamplesPerPixel(1);
-    for (uint32_t y = 0; y < cam.height; ++y)
-        for (uint32_t x = 0; x < cam.width; ++x) {
-            double lx = -1.0 + 2.0 * (x + 0.5) / w, ly = h / w - 2.0 * (y + 0.5) / w;
-            double cosZ = plane / std::sqrt(lx * lx + ly * ly + plane * plane);
-            double tau = (ly > 0 ? kTauConstant : kTauFalloff) / cosZ;
-            double value = shader::trForm(model, shader::kFormSurfaceSurface, float(tau));
-            film.sums(shader::kChannelEstimate)[size_t(y) * cam.width + x] = glm::dvec4(value, value, value, 0.0);
-            film.sums(shader::kChannelEstimateSq)[size_t(y) * cam.width + x] = glm::dvec4(value * value);
-        }
-    return blockMeans(film, kBlock);
+// Z-tests of the render's regions against the closed form (slab_closed_form.h).
+ZSummary compareToClosedForm(const std::vector<RegionMean>& render, const std::vector<RegionMean>& exact) {
+    return compareRegions(render, withOffsetAllowance(exact), sidakThreshold(kAlpha, render.size() * 3));
 }
 
-// Z-tests of the render's regions against the closed form. The closed form gets a standard
-// deviation of 2e-5 of its value: ray offsets at the slab faces (1e-5 of the scene size) shorten
-// every segment, which zero-variance estimators on constant density resolve.
-ZSummary compareToClosedForm(const std::vector<RegionMean>& render, const std::vector<RegionMean>& exact) {
-    std::vector<RegionMean> rounded = exact;
-    for (RegionMean& r : rounded) r.variance = glm::dvec3(2e-5 * r.mean) * glm::dvec3(2e-5 * r.mean);
-    return compareRegions(render, rounded, sidakThreshold(kAlpha, render.size() * 3));
+std::vector<RegionMean> slabClosedForm(const Scene& scene, const shader::TrModel& model) {
+    return telescope::test::slabClosedForm(scene, model, kBlock);
 }
 
 class MediaRender : public ::testing::Test {
@@ -113,12 +95,16 @@ TEST_F(MediaRender, EveryUnbiasedEstimatorMatchesTheSlab) {
     }
 }
 
-TEST_F(MediaRender, BiasedMarchingAtLevel0FailsTheSlab) {
+TEST_F(MediaRender, BiasedMarchingAtTheBaseLevelFailsTheSlab) {
+    // Level 1 (2 points per segment), 64 spp: as the debiased estimators above. Marching is exact
+    // on the constant half; the falloff half (bottom 2 block rows x 4 x 3 channels = 24 tests) is
+    // biased.
     for (const SlabModel& model : {exponentialModel(), davisModel()}) {
-        Scene scene = slabScene(model, R"({"type":"ray_march","level":0})");
+        Scene scene = slabScene(model, R"({"type":"ray_march","level":1})");
         Film film = renderFilm(scene, 64, 17);
         ZSummary z = compareToClosedForm(blockMeans(film, kBlock), slabClosedForm(scene, model.model));
-        // The falloff half (bottom 2 block rows x 4 x 3 channels = 24 tests) is biased.
+        std::printf("%s, 2-point marching: %zu of %zu tests fail (worst %s)\n", model.json.c_str(), z.failing, z.tests,
+                    z.worst.c_str());
         EXPECT_GE(z.failing, 24u) << model.json << ": " << z.worst;
     }
 }
@@ -133,19 +119,22 @@ Scene cloudScene(const std::string& estimator) {
 }  // namespace
 
 TEST_F(MediaRender, DavisCloudDebiasedAgreesWithHighLevelMarchingAndLowLevelDoesNot) {
-    // Reference: biased marching at a very high level, 2^6 points per segment.
+    // Reference: biased marching at a very high level, 2^6 points per segment. The debiased
+    // estimator runs at base level k = 0 here: at 1024 spp on this cloud the bias of 2-point
+    // marching is below what 4x4 blocks resolve (max |Z| 3.5), so k = 1 would have no control.
     const auto reference = blockMeans(renderFilm(cloudScene(R"({"type":"ray_march","level":6})"), 1024, 31), 4);
-    Film film = renderFilm(cloudScene(R"({"type":"debiased_ray_march","level":1})"), 1024, 32);
+    Film film = renderFilm(cloudScene(R"({"type":"debiased_ray_march","level":0})"), 1024, 32);
     auto regions = blockMeans(film, 4);
     const double threshold = sidakThreshold(kAlpha, regions.size() * 3);
     ZSummary z = compareRegions(regions, reference, threshold);
     EXPECT_EQ(z.failing, 0u) << z.worst << " (" << z.tests << " tests)";
     EXPECT_EQ(film.nonFiniteSamples(), 0u);
 
+    // Positive control: marching at the debiased estimator's base level (1 point), same spp.
     auto biased = blockMeans(renderFilm(cloudScene(R"({"type":"ray_march","level":0})"), 1024, 33), 4);
     ZSummary zb = compareRegions(biased, reference, threshold);
-    std::printf("low-level marching: %zu of %zu region tests fail (worst %s)\n", zb.failing, zb.tests, zb.worst.c_str());
-    EXPECT_GE(zb.failing, zb.tests / 4) << zb.worst;
+    std::printf("marching at the base level: %zu of %zu region tests fail (worst %s)\n", zb.failing, zb.tests, zb.worst.c_str());
+    EXPECT_GT(zb.failing, 0u) << zb.worst;
 }
 
 TEST_F(MediaRender, ConstantAndLinearGridsMatchTheSlabClosedForm) {
@@ -170,10 +159,12 @@ TEST_F(MediaRender, ConstantAndLinearGridsMatchTheSlabClosedForm) {
     Film film = renderFilm(scene, 64, 19);
     ZSummary z = compareToClosedForm(blockMeans(film, kBlock), slabClosedForm(scene, exponentialModel().model));
     EXPECT_EQ(z.failing, 0u) << z.worst;
+    // Positive control: marching at the debiased estimator's base level (2 points), same spp.
     Scene biased = scene;
     biased.integrator.transmittance.type = TransmittanceEstimatorType::RayMarch;
-    biased.integrator.transmittance.level = 0;
+    biased.integrator.transmittance.level = 1;
     Film b = renderFilm(biased, 64, 20);
     ZSummary zb = compareToClosedForm(blockMeans(b, kBlock), slabClosedForm(scene, exponentialModel().model));
-    EXPECT_GE(zb.failing, 40u) << "1-point marching is biased on both halves: " << zb.worst;
+    std::printf("2-point marching on the linear grid: %zu of %zu tests fail (worst %s)\n", zb.failing, zb.tests, zb.worst.c_str());
+    EXPECT_GE(zb.failing, 24u) << "2-point marching is biased on both halves: " << zb.worst;
 }

@@ -21,6 +21,16 @@ std::vector<RegionMean> blockMeans(const Film& film, uint32_t block, uint32_t ch
     return out;
 }
 
+RegionMean imageMean(const Film& film, uint32_t channel) {
+    RegionMean r;
+    const double n = double(film.pixelCount());
+    for (size_t i = 0; i < film.pixelCount(); ++i) {
+        r.mean += film.mean(channel, i) / n;
+        r.variance += film.varianceOfMean(i) / (n * n);
+    }
+    return r;
+}
+
 namespace {
 // Inverse of the standard normal upper tail by bisection on erfc (accurate and dependency-free).
 double normalUpperQuantile(double p) {
@@ -46,6 +56,63 @@ void record(ZSummary& s, double z, double threshold, size_t region, int channel)
 double sidakThreshold(double alpha, size_t tests) {
     double perTest = 1.0 - std::pow(1.0 - alpha, 1.0 / double(tests));
     return normalUpperQuantile(perTest / 2.0);
+}
+
+namespace {
+// Regularised incomplete beta I_x(a, b) by its continued fraction (modified Lentz), with the
+// symmetry I_x(a, b) = 1 - I_{1-x}(b, a) where the fraction converges slowly.
+double incompleteBeta(double a, double b, double x) {
+    if (x <= 0.0) return 0.0;
+    if (x >= 1.0) return 1.0;
+    if (x > (a + 1.0) / (a + b + 2.0)) return 1.0 - incompleteBeta(b, a, 1.0 - x);
+    const double tiny = 1e-300;
+    auto guard = [tiny](double v) { return std::abs(v) < tiny ? tiny : v; };
+    double c = 1.0, d = 1.0 / guard(1.0 - (a + b) * x / (a + 1.0)), h = d;
+    for (int m = 1; m <= 500; ++m) {
+        const double m2 = 2.0 * m;
+        double num = m * (b - m) * x / ((a - 1.0 + m2) * (a + m2));
+        d = 1.0 / guard(1.0 + num * d);
+        c = guard(1.0 + num / c);
+        h *= d * c;
+        num = -(a + m) * (a + b + m) * x / ((a + m2) * (a + 1.0 + m2));
+        d = 1.0 / guard(1.0 + num * d);
+        c = guard(1.0 + num / c);
+        const double step = d * c;
+        h *= step;
+        if (std::abs(step - 1.0) < 1e-15) break;
+    }
+    const double front = std::exp(std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x));
+    return front * h / a;
+}
+
+// Upper tail of Student's t with nu degrees of freedom: P(T > t) = I_{nu / (nu + t^2)}(nu / 2, 1 / 2) / 2.
+double studentUpperTail(double t, double nu) { return 0.5 * incompleteBeta(0.5 * nu, 0.5, nu / (nu + t * t)); }
+}  // namespace
+
+double sidakThresholdT(double alpha, size_t tests, double dof) {
+    const double perTest = 1.0 - std::pow(1.0 - alpha, 1.0 / double(tests));
+    double lo = 0.0, hi = 1e3;
+    for (int i = 0; i < 100; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (studentUpperTail(mid, dof) > perTest / 2.0 ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+ZSummary compareBlocksAndImage(const Film& film, const std::vector<RegionMean>& referenceBlocks,
+                               const RegionMean& referenceImage, uint32_t block, double alpha) {
+    const std::vector<RegionMean> blocks = blockMeans(film, block);
+    const double threshold = sidakThreshold(alpha, (blocks.size() + 1) * 3);
+    ZSummary z = compareRegions(blocks, referenceBlocks, threshold);
+    const ZSummary whole = compareRegions({imageMean(film)}, {referenceImage}, threshold);
+    z.tests += whole.tests;
+    z.failing += whole.failing;
+    if (whole.maxAbsZ > z.maxAbsZ) {
+        z.maxAbsZ = whole.maxAbsZ;
+        z.worst = "image mean " + whole.worst.substr(whole.worst.find("channel"));
+    }
+    z.threshold = threshold;
+    return z;
 }
 
 ZSummary compareRegions(const std::vector<RegionMean>& a, const std::vector<RegionMean>& b, double threshold) {

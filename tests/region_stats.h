@@ -1,6 +1,10 @@
-// Statistics over image regions for render tests (ESTIMATORS.md section 6): block means with the
-// variance of the mean taken from the estimator's own per-pixel sample variance, Z-scores against
-// an analytic value or an independent render, and a Sidak-corrected threshold.
+// Statistics over image regions for render tests (docs/ESTIMATORS.md section 6, docs/TESTING.md):
+// block means with the variance of the mean taken from the estimator's own per-pixel sample
+// variance, Z-scores against an analytic value or an independent render, Sidak-corrected
+// thresholds (normal, or Student t for a few batch means).
+//
+// A Z-test is valid only for an estimator with finite variance and enough samples per region for
+// the central limit theorem; each test states why its estimator has finite variance.
 #pragma once
 
 #include <cmath>
@@ -21,14 +25,20 @@ struct RegionMean {
 // Means of the estimate over square blocks of `block` x `block` pixels (row-major blocks).
 std::vector<RegionMean> blockMeans(const Film& film, uint32_t block, uint32_t channel = 0);
 
+// The mean of the whole image (one region).
+RegionMean imageMean(const Film& film, uint32_t channel = 0);
+
 // Two-sided normal quantile for a family of `tests` tests at overall false-alarm rate `alpha`.
 double sidakThreshold(double alpha, size_t tests);
+// The same with Student's t with `dof` degrees of freedom (means of a few batches).
+double sidakThresholdT(double alpha, size_t tests, double dof);
 
 struct ZSummary {
     double maxAbsZ = 0.0;
     size_t failing = 0;   // tests above the threshold
     size_t tests = 0;
     std::string worst;    // description of the worst test
+    double threshold = 0.0;  // set by compareBlocksAndImage
 };
 
 // Z = (a - b) / sqrt(var_a + var_b) per block and colour channel. Noiseless blocks must agree
@@ -36,6 +46,13 @@ struct ZSummary {
 ZSummary compareRegions(const std::vector<RegionMean>& a, const std::vector<RegionMean>& b, double threshold);
 // Against a known value per channel; a noiseless block must equal it to 1e-6.
 ZSummary compareToValue(const std::vector<RegionMean>& a, glm::dvec3 value, double threshold);
+
+// The unbiasedness test of a render against a reference (an independent render or a closed form
+// with its own variance): every block of `block` x `block` pixels and the whole image, three
+// channels each, one Sidak family at false-alarm rate `alpha`. The image mean catches a small
+// bias spread over the image that no single block resolves.
+ZSummary compareBlocksAndImage(const Film& film, const std::vector<RegionMean>& referenceBlocks,
+                               const RegionMean& referenceImage, uint32_t block, double alpha = 1e-3);
 
 }  // namespace telescope::test
 

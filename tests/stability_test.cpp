@@ -1,12 +1,16 @@
 // Hard-case stability suite: scenes and settings at the edges of what the estimators handle.
 // Every case renders a small image and checks that every sample was finite (the renderer counts
-// non-finite samples in its stats; the suite requires 0) and every output pixel is finite; where
-// the answer is known, the estimate must also lie within its statistical bound.
+// non-finite samples in its stats; the suite requires 0) and every output pixel is finite, and
+// wherever the answer is known, the value: a closed form within a statistical bound valid for the
+// estimator (finite variance: each case says why), an exact value where the estimator has no
+// noise, or equality with an equivalent scene. docs/TESTING.md lists the cases without a known
+// answer and why.
 //
 // Each case is one test so a failure names the case. The scenes are built here from the shipped
 // ones by scaling or editing the JSON, so the cases stay readable next to their expectations.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -19,6 +23,8 @@
 
 #include "region_stats.h"
 #include "render_harness.h"
+#include "shared/transmittance.h"
+#include "slab_closed_form.h"
 
 using namespace telescope;
 using namespace telescope::test;
@@ -91,8 +97,17 @@ void expectImageMean(const Film& film, double value, const std::string& what) {
     }
 }
 
+// In the furnace (albedo 0.5) E[D_j^2] falls by 0.25 per level: r = 0.5 has finite variance.
 constexpr const char* kSingleTerm = R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.5}})";
 constexpr const char* kSum = R"({"estimator":"sum","pmf":{"type":"geometric","r":0.5}})";
+// In the Cornell boxes E[D_j^2] falls by ~0.5 per level: r = 0.3 has finite variance.
+constexpr const char* kCornellSingleTerm = R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.3}})";
+
+// Two independent renders of scenes with the same answer agree per 8x8 block and over the image.
+void expectSameAnswer(const Film& a, const Film& b, const std::string& what) {
+    ZSummary z = compareBlocksAndImage(a, blockMeans(b, 8), imageMean(b), 8);
+    EXPECT_EQ(z.failing, 0u) << what << ": " << z.worst << " (threshold " << z.threshold << ")";
+}
 
 class Stability : public ::testing::Test {
 protected:
@@ -147,13 +162,16 @@ TEST_F(Stability, VeryBrightTinyLight) {
                                {"bsdf", j["primitives"][0]["bsdf"]},
                                {"emission", 1e8},
                                {"transform", {{"position", {0.0, 1.5, 0.0}}, {"scale", 1e-4}}}});
+    // No closed form; finite only.
     Scene scene = sceneFromJson(j, "bright speck", {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "2"},
-                                                     {"integrator.debias", kSingleTerm}});
+                                                     {"integrator.debias", kCornellSingleTerm}});
     expectFinite(renderFilm(scene, 16, 3), "bright tiny light");
 }
 
 // ---- Grazing angles: the camera a hair above the plane looking along it ----
 
+// No closed form is checked for the two grazing cases (per-pixel geometry at 1e-5 of the scene);
+// finite only.
 TEST_F(Stability, GrazingCamera) {
     json j = readJson("scenes/point-plane.json");
     j["camera"]["transform"] = {{"position", {0.0, 1e-5, 5.0}}, {"look_at", {0.0, 1e-5, 0.0}}, {"up", {0.0, 1.0, 0.0}}};
@@ -184,67 +202,132 @@ TEST_F(Stability, DegenerateTriangles) {
                "v 0 0 0.3\nv 1e-12 0 0.3\nv 0 1 0.3\n"       // needle
                "f 1 2 3\nf 1 3 4\nf 5 6 7\nf 8 8 8\nf 9 10 11\n";
     }
-    json j = readJson("scenes/point-plane.json");
-    j["primitives"][0] = {{"name", "mesh"}, {"type", "mesh"}, {"file", obj.string()}, {"bsdf", "grey"},
-                          {"transform", {{"rotation", {-90.0, 0.0, 0.0}}, {"scale", 2.0}}}};
-    Scene scene = sceneFromJson(j, "degenerate", {{"camera.resolution", "[16,16]"}, {"integrator.debias", kSingleTerm},
-                                                  {"integrator.max_bounces", "1"}});
-    expectFinite(renderFilm(scene, 16, 9), "degenerate triangles");
+    const auto quad = dir / "quad.obj";
+    {
+        std::ofstream out(quad);
+        out << "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n";
+    }
+    auto render = [&](const std::filesystem::path& file) {
+        json j = readJson("scenes/point-plane.json");
+        j["primitives"][0] = {{"name", "mesh"}, {"type", "mesh"}, {"file", file.string()}, {"bsdf", "grey"},
+                              {"transform", {{"rotation", {-90.0, 0.0, 0.0}}, {"scale", 2.0}}}};
+        Scene scene = sceneFromJson(j, "degenerate", {{"camera.resolution", "[16,16]"}, {"integrator.debias", kSingleTerm},
+                                                      {"integrator.max_bounces", "1"}});
+        return renderFilm(scene, 16, 9);
+    };
+    const Film withDegenerate = render(obj), quadOnly = render(quad);
+    expectFinite(withDegenerate, "degenerate triangles");
+    // Known answer: the degenerate triangles are never hit, so the image is the good quad's, sample
+    // for sample (same seed).
+    size_t differing = 0;
+    for (size_t i = 0; i < quadOnly.pixelCount(); ++i) {
+        const glm::dvec3 a = withDegenerate.mean(shader::kChannelEstimate, i), b = quadOnly.mean(shader::kChannelEstimate, i);
+        differing += glm::any(glm::greaterThan(glm::abs(a - b), 1e-6 * (glm::abs(b) + 1e-6)));
+    }
+    EXPECT_EQ(differing, 0u) << "the degenerate triangles changed the image";
 }
 
 // ---- Level distributions with extreme tails (levels far beyond the trace depth) ----
+// scenes/furnace.json: Le = 1, albedo a, k = 1; L = 1 / (1 - a), I(1) = 1 + a.
 
-void furnaceWithDebias(const std::string& debias, double albedo, double expected, uint64_t spp) {
+Film furnaceWithDebias(const std::string& debias, double albedo, uint64_t spp) {
     Scene scene = loadTestScene("scenes/furnace.json", {{"camera.resolution", "[16,16]"},
                                                         {"integrator.max_bounces", "1"},
                                                         {"bsdfs[0].albedo", std::to_string(albedo)},
                                                         {"integrator.debias", debias}});
     Film film = renderFilm(scene, spp, 17);
     expectFinite(film, debias);
-    if (expected > 0.0) expectValue(film, expected, 8, debias);
+    return film;
 }
 
 TEST_F(Stability, GeometricPmfWithTinyR) {
     // r = 1e-6: levels up to ~1.7e7, far past the trace depth; corrections there are exactly 0.
-    furnaceWithDebias(R"({"estimator":"single_term","pmf":{"type":"geometric","r":1e-6}})", 0.5, 0.0, 8);
+    // Sum estimator: 1 / P(N >= j) ~ 1 up to the trace depth, so Z is nearly the full series and
+    // its variance small: Z-test against L = 2. (The single-term estimator at this r has finite
+    // variance too, but its mean sits in events of probability ~1e-6 per sample: the central
+    // limit theorem needs ~1e7 samples. It is checked for finiteness only.)
+    expectValue(furnaceWithDebias(R"({"estimator":"sum","pmf":{"type":"geometric","r":1e-6}})", 0.5, 8), 2.0, 8,
+                "sum, r = 1e-6");
+    furnaceWithDebias(R"({"estimator":"single_term","pmf":{"type":"geometric","r":1e-6}})", 0.5, 8);
 }
 TEST_F(Stability, GeometricPmfWithRNearOne) {
-    // r = 0.999: p(j) underflows float after a dozen levels, which u in [0,1) never reaches.
-    furnaceWithDebias(R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.999}})", 0.5, 0.0, 32);
+    // r = 0.999: p(j) underflows float after a dozen levels, which u in [0,1) never reaches. With
+    // albedo 0.01, E[D_j^2] falls by 1e-4 per level against p(j) by 1e-3: finite variance, so a
+    // Z-test against L = 1 / 0.99. (With albedo 0.5 the variance is infinite and no test of the
+    // mean is valid at any fixed sample count.)
+    expectValue(furnaceWithDebias(R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.999}})", 0.01, 32),
+                1.0 / 0.99, 8, "single term, r = 0.999");
 }
 TEST_F(Stability, PowerLawPmfHeavyTail) {
-    // alpha = 0.999: P(M >= m) = (m+1)^-0.001, levels clamp at 2^31 - 1.
-    furnaceWithDebias(R"({"estimator":"sum","pmf":{"type":"power_law","alpha":0.999}})", 0.5, 0.0, 8);
+    // alpha = 0.999: P(M >= m) = (m+1)^-0.001, levels clamp at 2^31 - 1. The sum estimator's
+    // weights 1 / P(N >= j) stay within 1.01 up to the trace depth: finite variance, L = 2.
+    expectValue(furnaceWithDebias(R"({"estimator":"sum","pmf":{"type":"power_law","alpha":0.999}})", 0.5, 8), 2.0, 8,
+                "sum, power law alpha = 0.999");
 }
 TEST_F(Stability, PowerLawPmfLightTail) {
-    // alpha = 0.01: 1 / P(M >= m) grows like m; the sum estimator stays unbiased.
-    furnaceWithDebias(R"({"estimator":"sum","pmf":{"type":"power_law","alpha":0.01}})", 0.5, 2.0, 256);
+    // alpha = 0.01: 1 / P(M >= m) grows like m against E[D_j] ~ 0.5^j; the sum estimator stays
+    // unbiased with finite variance.
+    expectValue(furnaceWithDebias(R"({"estimator":"sum","pmf":{"type":"power_law","alpha":0.01}})", 0.5, 256), 2.0, 8,
+                "sum, power law alpha = 0.01");
 }
 TEST_F(Stability, AlbedoNearOne) {
-    // a = 0.99: L = 100, reached only through hundreds of bounces.
-    furnaceWithDebias(R"({"estimator":"sum","pmf":{"type":"geometric","r":0.01}})", 0.99, 0.0, 16);
+    // a = 0.99: L = 100, reached only through hundreds of bounces. Sum estimator, r = 0.01:
+    // D_j / P(N >= j) = 0.99^(j+1) / 0.99^(j-1) is bounded and N geometric, so Z has finite
+    // variance (standard deviation ~100 per sample): Z-test against 100.
+    expectValue(furnaceWithDebias(R"({"estimator":"sum","pmf":{"type":"geometric","r":0.01}})", 0.99, 16), 100.0, 8,
+                "albedo 0.99");
 }
 
 // ---- Specular traps: a mirror box never ends a path before the trace-depth cap ----
 
+// Mirror walls of albedo 0.999 that all emit 1: a path collects 0.999^b at bounce b and only
+// Russian roulette or the depth limit ends it. Biased I(64): L = sum_{b <= 64} 0.999^b = 62.96
+// (Z-test of the image mean; the estimate is bounded).
+Scene mirrorFurnace(uint32_t maxBounces, const std::string& debias) {
+    std::vector<SceneOverride> o = {{"camera.resolution", "[16,16]"},
+                                    {"integrator.max_bounces", std::to_string(maxBounces)},
+                                    {"bsdfs[0]", R"({"name":"grey","type":"mirror","albedo":0.999})"}};
+    if (!debias.empty()) o.push_back({"integrator.debias", debias});
+    return loadTestScene("scenes/furnace.json", o);
+}
+
 TEST_F(Stability, MirrorFurnace) {
-    Scene scene = loadTestScene("scenes/furnace.json",
-                                {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "2"},
-                                 {"bsdfs[0]", R"({"name":"grey","type":"mirror","albedo":0.999})"},
-                                 {"integrator.debias", kSingleTerm}});
-    expectFinite(renderFilm(scene, 8, 19), "mirror furnace");
+    Film film = renderFilm(mirrorFurnace(64, ""), 64, 19);
+    expectFinite(film, "mirror furnace");
+    expectImageMean(film, (1.0 - std::pow(0.999, 65.0)) / 0.001, "mirror furnace, I(64)");
+}
+
+// KNOWN FAILURE, disabled: deep paths lose energy on lavapipe. The debiased sum estimator
+// (r = 0.001: every weighted term is 0.999^(k+1), N geometric, finite variance) should give
+// sum_{b <= 4096} 0.999^b = 983.4 (the tracer's depth cap); it gives ~408 (Z = -33). The biased
+// I(300) gives 258 of 260 at 4 spp but 145 at 16 spp (one dispatch holds up to 16 samples),
+// while I(64) at 64 spp is right (63.00 of 62.96). The loss depends on the samples per dispatch,
+// which points at path_trace's per-dispatch sample loop; lavapipe's silent loop-iteration limit
+// is one candidate. Not diagnosed further; enable once fixed.
+TEST_F(Stability, DISABLED_MirrorFurnaceAtTheTraceDepthCap) {
+    Film film = renderFilm(mirrorFurnace(2, R"({"estimator":"sum","pmf":{"type":"geometric","r":0.001}})"), 8, 19);
+    expectFinite(film, "mirror furnace");
+    const double capped = (1.0 - std::pow(0.999, double(shader::kTraceDepthCap) + 1.0)) / 0.001;
+    expectImageMean(film, capped, "mirror furnace at the depth cap");
 }
 
 TEST_F(Stability, ExtremeIndexOfRefraction) {
+    // A glass ball of index 1 (or 1.0001: reflectance 6e-10) is invisible: the debiased render
+    // equals the box without the ball in expectation (its bounce counts shift, its limit does not).
+    // Two independent renders, Z-test per block and of the image mean (finite variance: r = 0.3 on
+    // a Cornell box). Index 20 has no closed form: finite only.
+    const std::vector<SceneOverride> settings = {{"camera.resolution", "[32,32]"}, {"integrator.debias", kCornellSingleTerm},
+                                                 {"integrator.max_bounces", "2"}};
+    const Film empty = renderFilm(sceneFromJson(readJson("scenes/cornell-box.json"), "no ball", settings), 64, 22);
+    uint32_t seed = 23;
     for (const char* ior : {"1.0", "1.0001", "20"}) {
         json j = readJson("scenes/cornell-box.json");
         j["bsdfs"].push_back({{"name", "glass"}, {"type", "dielectric"}, {"ior", std::stod(ior)}});
         j["primitives"].push_back({{"name", "ball"}, {"type", "sphere"}, {"bsdf", "glass"},
                                    {"transform", {{"position", {0.0, 0.5, 0.0}}, {"scale", 0.4}}}});
-        Scene scene = sceneFromJson(j, std::string("ior ") + ior,
-                                    {{"camera.resolution", "[16,16]"}, {"integrator.debias", kSingleTerm},
-                                     {"integrator.max_bounces", "2"}});
-        expectFinite(renderFilm(scene, 8, 23), std::string("dielectric ior ") + ior);
+        const Film film = renderFilm(sceneFromJson(j, std::string("ior ") + ior, settings), 64, seed++);
+        expectFinite(film, std::string("dielectric ior ") + ior);
+        if (std::string(ior) != "20") expectSameAnswer(film, empty, std::string("ball of index ") + ior);
     }
 }
 
@@ -261,11 +344,15 @@ TEST_F(Stability, OddImageSizes) {
 }
 
 TEST_F(Stability, CameraOnASurface) {
+    // The camera on the back wall looking in sees the furnace: L = 2 everywhere (sum estimator,
+    // r = 0.5: finite variance in the furnace).
     Scene scene = loadTestScene("scenes/furnace.json", {{"camera.resolution", "[16,16]"},
                                                         {"camera.transform.position", "[0,0,-1]"},
                                                         {"camera.transform.look_at", "[0,0,1]"},
                                                         {"integrator.debias", kSum}, {"integrator.max_bounces", "1"}});
-    expectFinite(renderFilm(scene, 16, 31), "camera on the back wall");
+    Film film = renderFilm(scene, 64, 31);
+    expectFinite(film, "camera on the back wall");
+    expectValue(film, 2.0, 8, "camera on the back wall");
 }
 
 TEST_F(Stability, NoEmissionAnywhere) {
@@ -327,6 +414,11 @@ TEST_F(Stability, PhotonsOnlyBehindTheSurface) {
         if (p["type"] == "point") p["transform"]["position"] = {0.0, -1.0, 0.0};
     Film film = renderPhotons({{"integrator.enable_two_sided_shading", "false"}}, 2, 46, &j);
     expectFinite(film, "photons behind the plane");
+    // Known answer: nothing reaches the lit side, so the image is black (next-event estimation
+    // from behind the plane is 0 too).
+    size_t lit = 0;
+    for (size_t i = 0; i < film.pixelCount(); ++i) lit += film.mean(shader::kChannelEstimate, i) != glm::dvec3(0.0);
+    EXPECT_EQ(lit, 0u) << "photons from behind the surface were gathered";
 }
 
 // ---- Participating media: optical depths from 1e-6 to 1e4, Davis near its limits, empty media ----
@@ -358,25 +450,42 @@ std::pair<double, double> halfMeans(const Film& film) {
     return {top / double(half), bottom / double(film.pixelCount() - half)};
 }
 
+// Pixels that differ from `value` by more than `tolerance`.
+size_t differingPixels(const Film& film, double value, double tolerance) {
+    size_t n = 0;
+    for (size_t i = 0; i < film.pixelCount(); ++i)
+        n += glm::any(glm::greaterThan(glm::abs(film.mean(shader::kChannelEstimate, i) - glm::dvec3(value)),
+                                       glm::dvec3(tolerance)));
+    return n;
+}
+
 TEST_F(Stability, OpticalDepthTiny) {
-    // tau = 1e-6: every estimator returns Le (1 - tau / cos) to within 1e-4.
+    // tau = 1e-6 (and 0.6e-6 through the falloff slab): every pixel equals the vacuum image, which
+    // is exactly Le = 1 (ZeroDensityMedium), to within 1e-5, since 1 - T <= 1.5e-6. Delta tracking
+    // returns 0 for a sample with a real collision (probability ~1e-6 per sample, ~7e-4 for one of
+    // the image's 1024 samples, each moving its pixel by 0.25): it may differ in one pixel (two or
+    // more: ~2e-7).
     for (const char* estimator : kAllTransmittanceEstimators) {
-        Film film = renderSlab(estimator, 1e-6, 1e-6);
+        const Film film = renderSlab(estimator, 1e-6, 1e-6);
         expectFinite(film, estimator);
-        auto [top, bottom] = halfMeans(film);
-        EXPECT_NEAR(top, 1.0, 1e-4) << estimator;
-        EXPECT_NEAR(bottom, 1.0, 1e-4) << estimator;
+        const size_t allowed = std::string(estimator).find("delta") != std::string::npos ? 1 : 0;
+        EXPECT_LE(differingPixels(film, 1.0, 1e-5), allowed) << estimator;
     }
 }
 
 TEST_F(Stability, OpticalDepthHuge) {
-    // tau = 1e4: exp(-1e4) underflows; every estimator returns 0 (or a finite, tiny value).
+    // tau = 1e4: exp(-1e4) underflows; every estimator returns a black image.
     for (const char* estimator : kAllTransmittanceEstimators) {
         Film film = renderSlab(estimator, 1e4, 1e4);
         expectFinite(film, estimator);
-        auto [top, bottom] = halfMeans(film);
-        EXPECT_LT(std::abs(top), 1e-6) << estimator;
-        EXPECT_LT(std::abs(bottom), 1e-6) << estimator;
+        size_t lit = 0;
+        double brightest = 0.0;
+        for (size_t i = 0; i < film.pixelCount(); ++i) {
+            const glm::dvec3 m = film.mean(shader::kChannelEstimate, i);
+            lit += m != glm::dvec3(0.0);
+            brightest = std::max({brightest, std::abs(m.x), std::abs(m.y), std::abs(m.z)});
+        }
+        EXPECT_EQ(lit, 0u) << estimator << ": brightest pixel " << brightest;
     }
 }
 
@@ -392,20 +501,24 @@ TEST_F(Stability, ZeroDensityMedium) {
 }
 
 TEST_F(Stability, DavisNearItsLimits) {
-    // T(tau) = (1 + tau / alpha)^-alpha: alpha = 1e-3 is nearly transparent far out (heavy tail),
-    // alpha = 1e6 is the exponential. Debiased marching and biased marching stay finite, and the
-    // debiased estimate on the constant slab matches the closed form within 5%.
+    // T(tau) = (1 + tau / alpha)^-alpha. As alpha -> 0, T -> 1 for every tau but slowly: at
+    // alpha = 1e-3 the slabs let through 0.993 (not vacuum's 1); alpha = 1e6 is the exponential.
+    // Debiased marching (64 spp) matches the closed form per 8x8 block (Z-test; finite variance:
+    // its estimates are bounded on these smooth densities), and the vacuum image fails the same
+    // test (positive control). Biased marching at level 2 stays finite.
+    Scene layout = loadTestScene("scenes/absorbing-slab.json", {{"camera.resolution", "[16,16]"}});
     for (double alpha : {1e-3, 1e6}) {
         const std::string model = fmt::format(R"({{"type":"davis","alpha":{}}})", alpha);
-        for (const char* estimator : {kAllTransmittanceEstimators[0], kAllTransmittanceEstimators[1]}) {
-            Film film = renderSlab(estimator, 1.2, 3.0, model, 16);
-            expectFinite(film, model + " " + estimator);
-        }
-        Film film = renderSlab(kAllTransmittanceEstimators[1], 1.2, 3.0, model, 64);
-        // The centre rows look along the normal (tau = 1.2 / cos, cos > 0.98 near the centre).
-        const double t = std::pow(1.0 + 1.2 / alpha, -alpha);
-        const glm::dvec3 centre = film.mean(shader::kChannelEstimate, 7 * 16 + 8);
-        EXPECT_NEAR(centre.x / t, 1.0, 0.05) << model;
+        expectFinite(renderSlab(kAllTransmittanceEstimators[0], 1.2, 3.0, model, 16), model + " ray_march");
+        const Film film = renderSlab(kAllTransmittanceEstimators[1], 1.2, 3.0, model, 64);
+        expectFinite(film, model + " debiased_ray_march");
+        const auto exact = withOffsetAllowance(
+            slabClosedForm(layout, shader::trSimple(shader::kTrDavis, glm::vec4(float(alpha), 0, 0, 0)), 8));
+        const double t = sidakThreshold(1e-3, exact.size() * 3);
+        const ZSummary z = compareRegions(blockMeans(film, 8), exact, t);
+        EXPECT_EQ(z.failing, 0u) << model << ": " << z.worst << " (threshold " << t << ")";
+        const ZSummary vacuum = compareRegions(std::vector<RegionMean>(exact.size(), RegionMean{glm::dvec3(1.0), glm::dvec3(0.0)}), exact, t);
+        EXPECT_EQ(vacuum.failing, vacuum.tests) << model << ": the vacuum image passes: " << vacuum.worst;
     }
 }
 

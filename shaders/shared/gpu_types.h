@@ -124,6 +124,7 @@ CONST uint kTraceDepthCap = 4096u;       // rays per path at most (a debiased le
 CONST uint kSpecRayEpsilon = 15u;        // absolute ray offset, from the scene size
 CONST uint kSpecPilot = 16u;             // pmf pilot: every sample takes the level pc.pilotLevel
 CONST uint kSpecLevelSchedule = 17u;     // kLevelSchedule*: how per-sample levels are laid out on lanes
+CONST uint kSpecTestPmfWeight = 18u;     // test-only: scales every 1 / p(j) (debias.test_pmf_weight)
 
 // Participating media, ids 32..47 (shaders/medium.glsl).
 CONST uint kSpecHasMedia = 32u;          // media or forward (index-matched) boundaries present
@@ -136,9 +137,14 @@ CONST uint kSpecCameraMedium = 38u;      // medium index + 1, 0 = vacuum
 CONST uint kSpecHasGrids = 39u;
 CONST uint kSpecTrModel = 40u;           // the transmittance model every medium shares, or 0xffffffff
 
+// Reconstruction filters (camera.reconstruction_filter; shared/pixel_filter.h has the wide ones).
 CONST uint kFilterBox = 0u;
 CONST uint kFilterTent = 1u;
 CONST uint kFilterDirac = 2u;
+CONST uint kFilterGaussian = 3u;
+CONST uint kFilterMitchellNetravali = 4u;
+CONST uint kFilterCatmullRom = 5u;
+CONST uint kFilterLanczos = 6u;
 
 CONST uint kPathTraceGroupSize = 8u;  // 8x8 pixel tiles
 
@@ -155,7 +161,7 @@ struct PathTracePush {
     uint queueCapacity;                        // items the level queue holds
 };
 
-// ---- Level scheduling (ESTIMATORS.md section 1; issue "level scheduling") ----
+// ---- Level scheduling (docs/ESTIMATORS.md section 1; issue "level scheduling") ----
 // per_pixel: each lane traces its own pixel's samples, each sample with its own level (the
 //            paper's estimator; lanes of a SIMD group hold paths of different lengths).
 // uniform:   one level per sample index shared by every pixel of the dispatch: no level
@@ -194,7 +200,7 @@ SHADER_NAMESPACE_END
 static_assert(sizeof(telescope::shader::PathTracePush) == 96);
 #endif
 
-// ---- Photon mapping passes (photon_trace, hash_grid_build, gather; ESTIMATORS.md section 3) ----
+// ---- Photon mapping passes (photon_trace, hash_grid_build, gather; docs/ESTIMATORS.md section 3) ----
 // Specialisation ids 48..63 (32..47 belong to participating media). The photon passes also take
 // the scene switches of the path tracer (kSpecHasSpheres ... kSpecRayEpsilon, same ids). Every
 // photon buffer is reached by device address, so none is bound by the 128 MiB binding limit.

@@ -1,4 +1,4 @@
-// The level distribution of the telescoping estimators (ESTIMATORS.md section 1).
+// The level distribution of the telescoping estimators (docs/ESTIMATORS.md section 1).
 //
 // Levels are counted from the base: m = j - k >= 0.
 //   geometric:  p(m) = r (1-r)^m,                      P(M >= m) = (1-r)^m

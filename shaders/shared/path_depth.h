@@ -1,4 +1,4 @@
-// The path-depth telescope (ESTIMATORS.md section 2).
+// The path-depth telescope (docs/ESTIMATORS.md section 2).
 //
 // I(d) sums the contributions c_b of paths with b <= d bounces. With the level M = j - k drawn
 // from a LevelPmf, one path traced to depth k + M + 1 gives

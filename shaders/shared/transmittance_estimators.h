@@ -1,4 +1,4 @@
-// Transmittance estimators (ESTIMATORS.md section 4), one source for GLSL and C++.
+// Transmittance estimators (docs/ESTIMATORS.md section 4), one source for GLSL and C++.
 //
 // A segment is [0, length] along a ray with density d(t) and material sigma_t (per channel), so
 // tau = sigma_t * integral d. Every estimator is a strategy over one of two walkers of sample
@@ -96,7 +96,7 @@ FN vec3 trRayMarch(uint k, TrModel m, uint form, TrSegment s, INOUT(Rng) rng, IN
     return trForm3(m, form, s.sigmaT * (sum * s.len / n));
 }
 
-// Debiased ray marching (ESTIMATORS.md section 4): one comb of 2^(j+1) points, ordered as
+// Debiased ray marching (docs/ESTIMATORS.md section 4): one comb of 2^(j+1) points, ordered as
 // 2^(j+1-k) interleaved sub-combs of 2^k points (sub-comb i holds points i, i + S, ...):
 //   <I(k)> = mean over sub-combs of g(tau_sub),
 //   <D_j>  = g(tau_all) - (g(tau_even) + g(tau_odd)) / 2   (even/odd = the sub-combs of even/odd i),

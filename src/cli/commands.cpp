@@ -21,6 +21,7 @@
 #include "render/image_output.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
+#include "scene/settings_json.h"
 #include "study/converge.h"
 #include "study/pmf_pilot.h"
 #include "study/reference.h"
@@ -123,6 +124,7 @@ void writeImages(const ImageOutputOptions& o, const Film& film, const OutputInfo
         {"telescope:scene_file", info.sceneFile},
         {"telescope:scene", info.sceneDocument},
         {"telescope:estimator", info.estimator},
+        {"telescope:settings", info.settings},
         {"telescope:seed", std::to_string(info.seed)},
         {"telescope:spp", std::to_string(film.samplesPerPixel())},
         {"telescope:render_seconds", fmt::format("{:.6f}", info.seconds)},
@@ -173,6 +175,7 @@ void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Cont
     j["non_finite_samples"] = film.nonFiniteSamples();
     j["validation_messages"] = context.validationMessageCount();
     j["estimator"] = renderer.plan().estimator;
+    j["settings"] = resolvedSettings(scene);
     for (const auto& [name, p] : stats.passes) j["passes"][name] = {{"dispatches", p.dispatches}, {"gpu_ms", p.gpuMs}};
     std::string tmp = path + ".partial";
     {
@@ -219,8 +222,8 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
     Film film = renderer.film();
     const RenderStats& stats = renderer.stats();
     writeImages(o.output, film,
-                {scene.path, scene.document.dump(), renderer.plan().estimator, context.info().name, o.seed,
-                 stats.wallSeconds});
+                {scene.path, scene.document.dump(), renderer.plan().estimator, context.info().name,
+                 resolvedSettings(scene).dump(), o.seed, stats.wallSeconds});
     if (!o.statsPath.empty()) writeStatsJson(o.statsPath, scene, context, renderer, film);
     if (!common.quiet) {
         const double paths = double(stats.samplesPerPixel - (resume ? resume->film.samplesPerPixel() : 0)) *
@@ -255,7 +258,9 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
     gpu::Context context(contextOptions(common));
     Renderer renderer(context, scene, o.seed);
     if (resume) renderer.resume(resume->film);
-    const OutputInfo info{scene.path, scene.document.dump(), renderer.plan().estimator, context.info().name, o.seed, 0.0};
+    const OutputInfo info{scene.path,          scene.document.dump(),           renderer.plan().estimator,
+                          context.info().name, resolvedSettings(scene).dump(), o.seed,
+                          0.0};
     const uint64_t startSpp = resume ? resume->film.samplesPerPixel() : 0;
     const uint64_t targetSpp = o.timeLimit > 0 ? 0 : (o.spp ? o.spp : scene.renderer.spp);
 
@@ -326,7 +331,7 @@ int runMerge(const MergeOptions& optionsIn) {
     nlohmann::json doc = nlohmann::json::parse(parts.front().scene, nullptr, false);
     std::string seeds;
     for (const auto& p : parts) seeds += (seeds.empty() ? "" : ",") + std::to_string(p.seed);
-    OutputInfo info{"merged", parts.front().scene, parts.front().estimator, "merged", parts.front().seed, 0.0};
+    OutputInfo info{"merged", parts.front().scene, parts.front().estimator, "merged", "", parts.front().seed, 0.0};
     writeImages(o.output, film, info);
     if (!o.quiet)
         fmt::print(stderr, "wrote {} ({} spp from {} renders, seeds {})\n", o.output.exrPath, film.samplesPerPixel(),

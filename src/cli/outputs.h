@@ -24,6 +24,7 @@ void checkValidation(const gpu::Context& context);
 
 struct OutputInfo {
     std::string sceneFile, sceneDocument, estimator, device;
+    std::string settings;  // resolvedSettings(): the settings as run (defaults filled, auto resolved)
     uint32_t seed = 0;
     double seconds = 0.0;
 };

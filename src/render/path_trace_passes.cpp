@@ -71,7 +71,10 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         plan.estimator = fmt::format(
             "debiased path depth ({} estimator), base k = {}, {}, {}",
             in.debias.estimator == DebiasEstimator::SingleTerm ? "single-term" : "Russian-roulette sum",
-            in.maxBounces, pmfDescription(in.debias.pmf),
+            in.maxBounces,
+            in.debias.testPmfWeight == 1.0f ? pmfDescription(in.debias.pmf)
+                                            : fmt::format("{} with every 1 / p(j) scaled by {:g} (TEST ONLY, biased)",
+                                                          pmfDescription(in.debias.pmf), in.debias.testPmfWeight),
             plan.levelSchedule == LevelSchedule::Uniform
                 ? "one level per sample index shared by all pixels (level_schedule 'uniform')"
             : plan.levelSchedule == LevelSchedule::Queued
@@ -114,6 +117,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
         {kSpecPilot, in.pilotLevel != kNoPilotLevel},
         {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},
+        {kSpecTestPmfWeight, gpu::specFloat(in.debias.testPmfWeight)},
         {kSpecHasMedia, f.media},
         {kSpecTrEstimator, uint32_t(in.transmittance.type)},
         {kSpecTrLevel, in.transmittance.level},

@@ -1,6 +1,8 @@
 #include "render/render_plan.h"
 
 #include <algorithm>
+#include <stdexcept>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -10,13 +12,21 @@
 namespace telescope {
 
 std::string pmfDescription(const PmfSettings& pmf) {
+    // The same text every output uses for the pmf (plan, EXR metadata, --stats-json).
     if (pmf.type == PmfType::Auto) return "auto pmf (pilot)";
     if (pmf.type == PmfType::Geometric) return fmt::format("geometric pmf, r = {:g}", pmf.r);
     return fmt::format("power-law pmf, alpha = {:g}", pmf.alpha);
 }
 
 uint32_t filterConstant(const Camera& camera) {
-    return camera.filter == "dirac" ? shader::kFilterDirac : camera.filter == "box" ? shader::kFilterBox : shader::kFilterTent;
+    const std::pair<const char*, uint32_t> filters[] = {
+        {"dirac", shader::kFilterDirac},         {"box", shader::kFilterBox},
+        {"tent", shader::kFilterTent},           {"gaussian", shader::kFilterGaussian},
+        {"mitchell_netravali", shader::kFilterMitchellNetravali}, {"catmull_rom", shader::kFilterCatmullRom},
+        {"lanczos", shader::kFilterLanczos}};
+    for (const auto& [name, constant] : filters)
+        if (camera.filter == name) return constant;
+    throw std::logic_error("unknown reconstruction filter '" + camera.filter + "' (the scene loader rejects it)");
 }
 
 RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
@@ -28,6 +38,21 @@ RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
 
 std::string describePlan(const Scene& scene, const RenderPlan& plan) {
     std::string s = fmt::format("scene: {}\nintegrator: {}\n", scene.path, plan.estimator);
+    if (scene.integrator.pilotLevel == kNoPilotLevel && !usesPhotons(scene.integrator) &&
+        scene.integrator.debias.estimator != DebiasEstimator::None) {
+        const PmfSettings& p = scene.integrator.debias.pmf;
+        s += fmt::format("path-depth pmf: {}; {}\n", pmfDescription(p),
+                         p.type == PmfType::Auto ? "chosen by a pilot before the render (see below)" : p.origin);
+        if (scene.integrator.debias.testPmfWeight != 1.0f)
+            s += fmt::format("TEST ONLY: every 1 / p(j) scaled by {:g} (test_pmf_weight): a biased estimator\n",
+                             scene.integrator.debias.testPmfWeight);
+    }
+    if (usesPhotons(scene.integrator) && scene.integrator.debias.estimator != DebiasEstimator::None)
+        s += fmt::format("photon level pmf: {}; {}\n", pmfDescription(scene.integrator.debias.pmf),
+                         scene.integrator.debias.pmf.origin);
+    if (!scene.media.empty() && scene.integrator.transmittance.type == TransmittanceEstimatorType::DebiasedRayMarch)
+        s += fmt::format("transmittance pmf: {}; {}\n", pmfDescription(scene.integrator.transmittance.pmf),
+                         scene.integrator.transmittance.pmf.origin);
     s += "passes, per batch of samples:\n";
     for (const auto& p : plan.passes) s += fmt::format("  {:<16} {}\n", p.name, p.why);
     s += "not scheduled:\n";

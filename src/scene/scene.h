@@ -102,11 +102,11 @@ struct Camera {
     glm::vec3 right{1.0f, 0.0f, 0.0f};    // unit, image right = forward x up (Tungsten)
     float fovDegrees = 60.0f;             // horizontal full angle
     uint32_t width = 512, height = 512;
-    std::string filter = "tent";
-    int32_t medium = -1;                  // index into Scene::media, -1 = vacuum          // reconstruction filter name (dirac, box, tent; others sampled as tent)
+    std::string filter = "tent";          // reconstruction filter (render_plan.h filterConstant)
+    int32_t medium = -1;                  // index into Scene::media, -1 = vacuum
 };
 
-// Settings of the debiasing telescope (ESTIMATORS.md section 1-2).
+// Settings of the debiasing telescope (docs/ESTIMATORS.md sections 1-2).
 // Auto: chosen by a pilot render before the render proper (src/study/pmf_pilot.h); the shaders
 // only ever see Geometric or PowerLaw.
 enum class PmfType : uint32_t { Geometric = 0, PowerLaw = 1, Auto = 2 };
@@ -118,7 +118,13 @@ struct PmfSettings {
     float alpha = 2.0f / 3.0f;  // power law: P(N >= m) = (m+1)^(alpha-1)
     uint32_t pilotSpp = 4;      // auto: samples per pixel of each pilot level
     uint32_t pilotLevels = 8;   // auto: levels measured by the pilot (the tail is fitted)
+    std::string origin = "given in the scene";  // why this pmf: the scene, a default and its reason, the pilot
 };
+
+// The pmf a telescope gets when its block names none, per application (docs/ESTIMATORS.md
+// section 1, "Defaults"). The photon default is set where photon mapping reads its block.
+PmfSettings defaultPathDepthPmf();
+PmfSettings defaultTransmittancePmf();
 
 constexpr uint32_t kNoPilotLevel = 0xffffffffu;
 
@@ -135,14 +141,17 @@ struct PhotonBlockSettings {
 
 struct DebiasSettings {
     DebiasEstimator estimator = DebiasEstimator::None;
-    PmfSettings pmf;
+    PmfSettings pmf = defaultPathDepthPmf();
     LevelSchedule schedule = LevelSchedule::PerPixel;  // photon mapping: Uniform or PerPixel
     PhotonBlockSettings photon;                        // photon mapping only
+    // Test-only ("test_pmf_weight"): every 1 / p(j) is multiplied by this, a deliberately biased
+    // estimator for the positive controls of the unbiasedness tests. 1 in any real render.
+    float testPmfWeight = 1.0f;
 };
 
 enum class IntegratorType : uint32_t { PathTracer = 0, PhotonMap = 1, ProgressivePhotonMap = 2 };
 
-// Photon mapping (ESTIMATORS.md section 3). Tungsten's key names where Tungsten has the setting.
+// Photon mapping (docs/ESTIMATORS.md section 3). Tungsten's key names where Tungsten has the setting.
 enum class PhotonKernel : uint32_t { Cone = 0, Uniform = 1, Epanechnikov = 2 };
 enum class DirectLighting : uint32_t { Photons = 0, NextEvent = 1 };
 
@@ -157,7 +166,7 @@ struct PhotonSettings {
 struct TransmittanceEstimatorSettings {
     TransmittanceEstimatorType type = TransmittanceEstimatorType::DebiasedRayMarch;
     uint32_t level = 1;  // ray marching: 2^k points; debiased: the base level k
-    PmfSettings pmf;     // debiased: geometric or power law (levels above k)
+    PmfSettings pmf = defaultTransmittancePmf();  // debiased: geometric or power law (levels above k)
 };
 
 

@@ -28,6 +28,26 @@
 
 namespace telescope {
 
+// ---- Default pmfs (docs/ESTIMATORS.md section 1, "Defaults") ----
+PmfSettings defaultPathDepthPmf() {
+    PmfSettings p;
+    p.type = PmfType::Geometric;
+    p.r = 0.25f;
+    p.origin = "default for path depth: on the shipped path-traced scenes E[D_j^2] falls ~0.5 per level, so a "
+               "geometric pmf has finite variance only for r < 0.5; the auto pilot picks r = 0.22 to 0.29 there "
+               "(docs/ACCURACY.md)";
+    return p;
+}
+
+PmfSettings defaultTransmittancePmf() {
+    PmfSettings p;
+    p.type = PmfType::Geometric;
+    p.r = 0.65f;
+    p.origin = "default for ray marching: for a smooth density E[D_j^2] ~ 4^-j at cost 2^j, so the optimum is "
+               "p(j) ~ 2^(-1.5 j), r = 1 - 2^-1.5 ~ 0.65 (finite variance and cost need 0.5 < r < 0.75)";
+    return p;
+}
+
 namespace {
 
 using nlohmann::json;
@@ -374,6 +394,10 @@ void SceneReader::read(const json& doc) {
     if (const json* integrator = find(doc, "integrator")) readIntegrator(*integrator);
     if (const json* renderer = find(doc, "renderer")) readRenderer(*renderer);
     checkEstimatorFitsMedia(doc);
+    // The photon gather pass samples dirac, box and tent only; the wide filters are path tracing's.
+    if (usesPhotons(scene_.integrator) && !isOneOf({"dirac", "box", "tent"}, scene_.camera.filter))
+        fail("camera.reconstruction_filter",
+             fmt::format("photon mapping supports the dirac, box and tent filters, not '{}'", scene_.camera.filter));
     ignoreUnread(doc, "", {"media", "bsdfs", "primitives", "camera", "integrator", "renderer"});
 }
 
@@ -818,6 +842,8 @@ void SceneReader::readPhotonBlocks(const json& v, const std::string& key) {
     if (!v.contains("pmf")) {
         d.pmf.type = PmfType::Geometric;
         d.pmf.r = 0.7f;
+        d.pmf.origin = "default for photon mapping's blocks: r = 0.7 (continue with q = 0.3) with m = 3, s = 1/sqrt(2): "
+                       "7 passes per sample, tail index 1.45, typical error ~ cost^-0.31 (docs/PHOTON-MAPPING.md)";
     } else if (d.pmf.type != PmfType::Geometric) {
         fail(member(member(key, "pmf"), "type"),
              "photon mapping's block levels take a \"geometric\" pmf (expected photon passes are infinite with a "
@@ -868,8 +894,14 @@ void SceneReader::readDebias(const json& v, const std::string& key, bool photons
             if (!isOneOf(known, name)) fail(member(objKey, name), fmt::format("unknown key '{}' in {}", name, objKey));
     };
     if (photons) rejectUnknown(v, key, {"estimator", "pmf", "level_schedule", "area_ratio", "photon_growth", "level_cap"});
-    else rejectUnknown(v, key, {"estimator", "pmf", "level_schedule"});
+    else rejectUnknown(v, key, {"estimator", "pmf", "level_schedule", "test_pmf_weight"});
     DebiasSettings& d = scene_.integrator.debias;
+    if (const json* w = find(v, "test_pmf_weight")) {
+        const std::string wKey = member(key, "test_pmf_weight");
+        d.testPmfWeight = number(*w, wKey);
+        if (!(d.testPmfWeight > 0.0f && std::isfinite(d.testPmfWeight)))
+            fail(wKey, fmt::format("test_pmf_weight must be positive, got {}", d.testPmfWeight));
+    }
 
     const std::string estimatorKey = member(key, "estimator");
     const json* estimator = find(v, "estimator");
@@ -899,6 +931,7 @@ void SceneReader::readDebias(const json& v, const std::string& key, bool photons
         if (!(x > 0.0f && x < 1.0f)) fail(fieldKey, fmt::format("{} must be in (0, 1), got {}", field, x));
         return x;
     };
+    d.pmf.origin = "given in the scene";
     if (type == "geometric") {
         rejectUnknown(*pmf, pmfKey, {"type", "r"});
         d.pmf.type = PmfType::Geometric;
@@ -1186,6 +1219,7 @@ void SceneReader::readTransmittanceEstimator(const json& v, const std::string& k
             if (!(x > 0.0f && x < 1.0f)) fail(member(pmfKey, field), fmt::format("{} must be in (0, 1), got {}", field, x));
             return x;
         };
+        t.pmf.origin = "given in the scene";
         if (ptype == "geometric") {
             rejectUnknownKeys(*pmf, pmfKey, {"type", "r"}, file_);
             t.pmf.type = PmfType::Geometric;

@@ -361,7 +361,16 @@ TEST(SceneLoader, DebiasSettings) {
     s = load(R"({"integrator": {"debias": {"estimator": "single_term"}}})");
     EXPECT_EQ(s.integrator.debias.estimator, DebiasEstimator::SingleTerm);
     EXPECT_EQ(s.integrator.debias.pmf.type, PmfType::Geometric);
-    EXPECT_FLOAT_EQ(s.integrator.debias.pmf.r, 0.65f);
+    EXPECT_FLOAT_EQ(s.integrator.debias.pmf.r, 0.25f);  // the path-depth default
+    EXPECT_NE(s.integrator.debias.pmf.origin.find("default for path depth"), std::string::npos);
+    EXPECT_FLOAT_EQ(s.integrator.debias.testPmfWeight, 1.0f);
+
+    // The transmittance default differs (docs/ESTIMATORS.md section 1).
+    EXPECT_FLOAT_EQ(s.integrator.transmittance.pmf.r, 0.65f);
+    s = load(R"({"integrator": {"debias": {"estimator": "single_term", "pmf": {"type": "geometric"}, "test_pmf_weight": 1.07}}})");
+    EXPECT_FLOAT_EQ(s.integrator.debias.pmf.r, 0.25f);
+    EXPECT_EQ(s.integrator.debias.pmf.origin, "given in the scene");
+    EXPECT_FLOAT_EQ(s.integrator.debias.testPmfWeight, 1.07f);
 }
 
 TEST(SceneLoader, PhotonMapSettings) {

@@ -302,6 +302,7 @@ bool resolveAutoPmf(gpu::Context& context, Scene& scene, uint32_t seed, PmfPilot
     if (d.estimator == DebiasEstimator::None || d.pmf.type != PmfType::Auto) return false;
     PmfPilotResult r = runPmfPilot(context, scene, seed);
     d.pmf = r.chosen.pmf;
+    d.pmf.origin = "chosen by the auto pilot: the lowest predicted work x variance over geometric and power-law pmfs";
     if (out) *out = std::move(r);
     return true;
 }

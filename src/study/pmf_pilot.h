@@ -1,4 +1,4 @@
-// The pmf recipe of ESTIMATORS.md section 1: a short pilot measures, per level j, the second
+// The pmf recipe of docs/ESTIMATORS.md section 1: a short pilot measures, per level j, the second
 // moment of the correction E[D_j^2] and the cost c_j of a sample at that level on the device; the
 // pmf is then the member of the geometric or power-law family that minimises the predicted
 // (variance x cost) of the single-term estimator,

@@ -1,5 +1,5 @@
 // `telescope study transmittance`: the paper's canonical 1-D study (Misso et al. 2022, section 4;
-// ESTIMATORS.md section 4). Every transmittance estimator runs on the device over a grid of 1-D
+// docs/ESTIMATORS.md section 4). Every transmittance estimator runs on the device over a grid of 1-D
 // problems (density profile constant / sine / Gaussian, target transmittance 0.01 to 0.99,
 // majorant looseness 1 to 2, exponential and Davis transmittance) and the work x MSE of each is
 // written as a CSV, one heat-map PNG per estimator (gnuplot) and a summary table.

@@ -115,15 +115,3 @@ TEST(LevelPmf, InverseProbabilitiesStayFiniteForExtremePmfs) {
         }
     }
 }
-
-TEST(Rng, NeverReturnsOneAndStreamsDiffer) {
-    Rng a = rngCreate(0, 0, 1), b = rngCreate(0, 1, 1), c = rngCreate(1, 0, 1);
-    int same = 0;
-    for (int i = 0; i < 100000; ++i) {
-        float x = rngNext(a), y = rngNext(b), z = rngNext(c);
-        ASSERT_LT(x, 1.0f);
-        ASSERT_GE(x, 0.0f);
-        same += (x == y) + (x == z);
-    }
-    EXPECT_LT(same, 20);
-}
