@@ -105,7 +105,7 @@ struct BatchTest {
 BatchTest batchMeansTest(const Batches& batches, double weight, const char* label) {
     const std::vector<double> want = analyticRegions();
     const uint32_t n = uint32_t(batches.base[0].size());
-    const double tLimit = sidakStudentThreshold(kAlpha, want.size(), n - 1.0);
+    const double tLimit = sidakThresholdT(kAlpha, want.size(), n - 1.0);
     const SignTestBounds sign = sidakSignTest(kAlpha, want.size(), n);
     BatchTest t;
     t.regions = want.size();

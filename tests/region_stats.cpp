@@ -142,30 +142,6 @@ ZSummary compareToValue(const std::vector<RegionMean>& a, glm::dvec3 value, doub
 
 namespace telescope::test {
 
-namespace {
-// P(|T| > t) for Student's t with nu degrees of freedom: 1 - 2 int_0^t pdf, Simpson's rule.
-double studentTwoSidedTail(double t, double nu) {
-    const double logc = std::lgamma(0.5 * (nu + 1.0)) - std::lgamma(0.5 * nu) - 0.5 * std::log(nu * M_PI);
-    auto pdf = [&](double x) { return std::exp(logc - 0.5 * (nu + 1.0) * std::log1p(x * x / nu)); };
-    const int n = 4000;  // even
-    const double h = t / n;
-    double sum = pdf(0.0) + pdf(t);
-    for (int i = 1; i < n; ++i) sum += (i % 2 ? 4.0 : 2.0) * pdf(i * h);
-    return 1.0 - 2.0 * sum * h / 3.0;
-}
-}  // namespace
-
-double sidakStudentThreshold(double alpha, size_t tests, double dof) {
-    const double one = 1.0 - std::pow(1.0 - alpha, 1.0 / double(tests));
-    double lo = 0.0, hi = 1.0;
-    while (studentTwoSidedTail(hi, dof) > one) hi *= 2.0;
-    for (int i = 0; i < 100; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        (studentTwoSidedTail(mid, dof) > one ? lo : hi) = mid;
-    }
-    return hi;
-}
-
 SignTestBounds sidakSignTest(double alpha, size_t tests, uint32_t n) {
     const double one = 1.0 - std::pow(1.0 - alpha, 1.0 / double(tests));
     // Largest k with 2 P(X < k) <= one.

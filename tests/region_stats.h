@@ -58,10 +58,6 @@ ZSummary compareBlocksAndImage(const Film& film, const std::vector<RegionMean>& 
 
 namespace telescope::test {
 
-// Two-sided Student t quantile with `dof` degrees of freedom for a family of `tests` tests at
-// overall false-alarm rate `alpha` (Sidak): |T| above it has probability 1 - (1 - alpha)^(1/tests).
-double sidakStudentThreshold(double alpha, size_t tests, double dof);
-
 // Smallest number k such that a sign test on n batch means (each above the answer with
 // probability 1/2) rejects when fewer than k or more than n - k are above, for a family of
 // `tests` tests at overall false-alarm rate alpha (Sidak). Also returns the rate each test has.
