@@ -19,6 +19,7 @@
 #include "core/error.h"
 #include "gpu/context.h"
 #include "render/renderer.h"
+#include "scene/settings_json.h"
 #include "scene/scene_loader.h"
 #include "shared/view_types.h"
 #include "study/pmf_pilot.h"
@@ -359,7 +360,7 @@ private:
         const Film film = renderer_->film();
         cli::writeImages(options_.output, film,
                          {scene_->path, scene_->document.dump(), renderer_->plan().estimator, context_.info().name,
-                          options_.seed, renderSeconds_});
+                          resolvedSettings(*scene_).dump(), options_.seed, renderSeconds_});
         if (!quiet_) fmt::print(stderr, "view: saved {} ({} spp)\n", options_.output.exrPath, film.samplesPerPixel());
     }
 
