@@ -279,6 +279,10 @@ private:
             const auto colon = rest.find(':');
             handle({InputEvent::Type::Drag, 0, 0, pan ? GLFW_MOUSE_BUTTON_RIGHT : GLFW_MOUSE_BUTTON_LEFT,
                     number(rest.substr(0, colon)), number(rest.substr(colon + 1))});
+        } else if (token.rfind("resize:", 0) == 0) {
+            const auto rest = token.substr(7);
+            const auto colon = rest.find(':');
+            window_.resize(int(number(rest.substr(0, colon))), int(number(rest.substr(colon + 1))));
         } else if (token.rfind("scroll:", 0) == 0) {
             handle({InputEvent::Type::Scroll, 0, 0, 0, 0.0, number(token.substr(7))});
         } else {
@@ -423,13 +427,15 @@ std::vector<ScriptedInput> parseInputScript(const std::string& text) {
         } catch (const std::exception&) {
             throw bad("the frame must be a positive integer");
         }
-        const bool pointer = s.token.rfind("drag:", 0) == 0 || s.token.rfind("pan:", 0) == 0;
+        const bool pointer = s.token.rfind("drag:", 0) == 0 || s.token.rfind("pan:", 0) == 0 ||
+                             s.token.rfind("resize:", 0) == 0;
         if (s.token == "shot" || s.token == "interrupt") {
             // scripting only: a screenshot now (needs --screenshot), SIGINT to the viewer itself
         } else if (pointer || s.token.rfind("scroll:", 0) == 0) {
             std::string args = s.token.substr(s.token.find(':') + 1);
             const size_t colon = args.find(':');
-            if (pointer == (colon == std::string::npos)) throw bad(pointer ? "expected drag:DX:DY or pan:DX:DY" : "expected scroll:N");
+            if (pointer == (colon == std::string::npos))
+                throw bad(pointer ? "expected drag:DX:DY, pan:DX:DY or resize:W:H" : "expected scroll:N");
             for (const std::string& part : {args.substr(0, colon), colon == std::string::npos ? "0" : args.substr(colon + 1)}) {
                 try {
                     size_t used = 0;
