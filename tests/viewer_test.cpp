@@ -203,13 +203,17 @@ TEST_F(Viewer, PhotonChannelsCameraAndInterrupt) {
     const std::string scene = test::sourcePath("scenes/point-plane-photon.json");
     const std::string sets = "--set 'camera.resolution=[32,32]'";
     Result v = view(scene + " " + sets + " --seed 3 --spp 4 --frames 100 -o " + path("b.exr") + " --screenshot " +
-                    path("p.png") + " --keys 'shot@6,3@7,shot@8,5@9,shot@10,Left@11,s@13,interrupt@14'");
+                    path("p.png") + " --keys 'shot@6,3@7,shot@8,5@9,shot@10,Left@11,s@13,resize:80:60@13,interrupt@14'");
     expectClean(v);
     EXPECT_NE(v.err.find("(interrupted)"), std::string::npos) << v.err;
     auto spp = sppByFrame(v.out);
     EXPECT_EQ(spp.count(15), 0u) << "SIGINT at frame 14 ends the loop after that frame";
     EXPECT_EQ(spp[11], 1) << "moving the camera must restart the samples";
     EXPECT_NE(v.err.find("same pipelines"), std::string::npos) << "photon passes change the camera in place";
+    // Resized at frame 13: the swapchain follows the window, the film is scaled to fit above the legend.
+    Image8 resized = readPng(path("p.png"));
+    EXPECT_EQ(resized.width, 80);
+    EXPECT_EQ(resized.height, 60);
 
     // ---- Correction view differs from the estimate view ----
     Image8 estimate = readPng(path("p-6.png")), correction = readPng(path("p-8.png")), negative = readPng(path("p-10.png"));

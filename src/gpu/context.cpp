@@ -174,8 +174,8 @@ Context::Context(const ContextOptions& options) {
                 throw std::runtime_error(fmt::format("--device {}: only {} Vulkan device(s) present",
                                                      options.deviceIndex, devices.size()));
             DeviceInfo d = describe(devices[options.deviceIndex], options.deviceIndex);
-            if (d.suitable && !missingDeviceExtension(devices[options.deviceIndex], options.deviceExtensions).empty())
-                d.whyNot = "no " + missingDeviceExtension(devices[options.deviceIndex], options.deviceExtensions);
+            const std::string missing = missingDeviceExtension(devices[options.deviceIndex], options.deviceExtensions);
+            if (d.suitable && !missing.empty()) d.whyNot = "no " + missing;
             d.suitable = d.whyNot.empty();
             if (!d.suitable)
                 throw std::runtime_error(fmt::format("device {} ({}) cannot run Telescope: {}",

@@ -106,11 +106,17 @@ float pivotDistance(const Scene& scene) {
     return std::max(along, 0.05f * glm::length(hi - lo));
 }
 
-// ---- The viewer: one Renderer per camera, the presenter, the input ----
+// ---- The viewer: the Renderer, its camera, what is shown, the input ----
 class Viewer {
 public:
-    Viewer(gpu::Context& context, Window& window, Scene scene, const ViewOptions& options, bool quiet)
-        : context_(context), window_(window), sceneAsLoaded_(std::move(scene)), options_(options), quiet_(quiet) {
+    Viewer(gpu::Context& context, Window& window, Presenter& presenter, Scene scene, const ViewOptions& options,
+           bool quiet)
+        : context_(context),
+          window_(window),
+          presenter_(presenter),
+          sceneAsLoaded_(std::move(scene)),
+          options_(options),
+          quiet_(quiet) {
         home_ = OrbitCamera::fromCamera(sceneAsLoaded_.camera, pivotDistance(sceneAsLoaded_));
         camera_ = home_;
         channel_ = uint32_t(channelFromName(options.channel));
@@ -120,7 +126,6 @@ public:
             fmt::print("{}", describePlan(*scene_, renderer_->plan()));
             fmt::print(stderr, "{}", kHelp);
         }
-        presenter_ = std::make_unique<Presenter>(context, window.createSurface(context.instance()), window.framebufferSize());
     }
 
     int run() {
@@ -167,7 +172,7 @@ private:
         bool shown = false;
         for (int attempt = 0; attempt < 4 && !shown; ++attempt) shown = show(&pixels);
         if (!shown) throw std::runtime_error("view: the window could not be presented for the screenshot");
-        const VkExtent2D e = presenter_->extent();
+        const VkExtent2D e = presenter_.extent();
         writeScreenshotPng(path, e.width, e.height, pixels);
         if (!quiet_)
             fmt::print(stderr, "view: wrote {} ({}x{}, {}, {} spp)\n", path, e.width, e.height, channelName(channel_),
@@ -225,7 +230,7 @@ private:
 
     bool show(std::vector<uint8_t>* capture) {
         const VkExtent2D win = window_.framebufferSize();
-        const VkExtent2D e = presenter_->extent();
+        const VkExtent2D e = presenter_.extent();
         const Camera& cam = scene_->camera;
         shader::ViewPush push{};
         push.filmWidth = cam.width;
@@ -240,7 +245,7 @@ private:
         push.channel = channel_;
         push.map = channelMap(channel_);
         push.scale = float(std::exp2(ev_[channel_]));
-        return presenter_->present(push, renderer_->accumulation().address(), win, capture);
+        return presenter_.present(push, renderer_->accumulation().address(), win, capture);
     }
 
     std::string statusLine() const {
@@ -275,6 +280,10 @@ private:
             const auto colon = rest.find(':');
             handle({InputEvent::Type::Drag, 0, 0, pan ? GLFW_MOUSE_BUTTON_RIGHT : GLFW_MOUSE_BUTTON_LEFT,
                     number(rest.substr(0, colon)), number(rest.substr(colon + 1))});
+        } else if (token.rfind("resize:", 0) == 0) {
+            const auto rest = token.substr(7);
+            const auto colon = rest.find(':');
+            window_.resize(int(number(rest.substr(0, colon))), int(number(rest.substr(colon + 1))));
         } else if (token.rfind("scroll:", 0) == 0) {
             handle({InputEvent::Type::Scroll, 0, 0, 0, 0.0, number(token.substr(7))});
         } else {
@@ -292,7 +301,7 @@ private:
         constexpr float kStep = 0.0872665f;  // 5 degrees
         if (e.type == InputEvent::Type::Drag) {
             const bool pan = e.button != GLFW_MOUSE_BUTTON_LEFT || (e.mods & GLFW_MOD_SHIFT);
-            const float perPixel = 1.0f / float(std::max(presenter_ ? presenter_->extent().height : 256u, 1u));
+            const float perPixel = 1.0f / float(std::max(presenter_.extent().height, 1u));
             if (pan) camera_.pan(-float(e.dx) * perPixel, float(e.dy) * perPixel);
             else camera_.orbit(-float(e.dx) * 3.0f * perPixel, float(e.dy) * 3.0f * perPixel);
             cameraMoved_ = true;
@@ -366,12 +375,12 @@ private:
 
     gpu::Context& context_;
     Window& window_;
+    Presenter& presenter_;
     const Scene sceneAsLoaded_;
     const ViewOptions options_;
     const bool quiet_;
     std::unique_ptr<Scene> scene_;
     std::unique_ptr<Renderer> renderer_;
-    std::unique_ptr<Presenter> presenter_;
     std::vector<ScriptedInput> script_;
     OrbitCamera home_, camera_;
     bool moved_ = false, cameraMoved_ = false, paused_ = false;
@@ -419,13 +428,15 @@ std::vector<ScriptedInput> parseInputScript(const std::string& text) {
         } catch (const std::exception&) {
             throw bad("the frame must be a positive integer");
         }
-        const bool pointer = s.token.rfind("drag:", 0) == 0 || s.token.rfind("pan:", 0) == 0;
+        const bool pointer = s.token.rfind("drag:", 0) == 0 || s.token.rfind("pan:", 0) == 0 ||
+                             s.token.rfind("resize:", 0) == 0;
         if (s.token == "shot" || s.token == "interrupt") {
             // scripting only: a screenshot now (needs --screenshot), SIGINT to the viewer itself
         } else if (pointer || s.token.rfind("scroll:", 0) == 0) {
             std::string args = s.token.substr(s.token.find(':') + 1);
             const size_t colon = args.find(':');
-            if (pointer == (colon == std::string::npos)) throw bad(pointer ? "expected drag:DX:DY or pan:DX:DY" : "expected scroll:N");
+            if (pointer == (colon == std::string::npos))
+                throw bad(pointer ? "expected drag:DX:DY, pan:DX:DY or resize:W:H" : "expected scroll:N");
             for (const std::string& part : {args.substr(0, colon), colon == std::string::npos ? "0" : args.substr(colon + 1)}) {
                 try {
                     size_t used = 0;
@@ -443,6 +454,45 @@ std::vector<ScriptedInput> parseInputScript(const std::string& text) {
     }
     return out;
 }
+
+namespace {
+
+// A Context on a device that can present to the window, and the window's surface on it: the
+// device asked for with --device, else the usual choice (a GPU first), else the first suitable
+// device that presents (a compute-only GPU may not).
+std::unique_ptr<gpu::Context> presentingContext(Window& window, gpu::ContextOptions options, VkSurfaceKHR& surface) {
+    auto attempt = [&](int index) -> std::unique_ptr<gpu::Context> {
+        options.deviceIndex = index;
+        auto context = std::make_unique<gpu::Context>(options);
+        VkSurfaceKHR s = window.createSurface(context->instance());
+        VkBool32 supported = VK_FALSE;
+        VkResult r = vkGetPhysicalDeviceSurfaceSupportKHR(context->physicalDevice(), context->queueFamily(), s, &supported);
+        if (r == VK_SUCCESS && supported) {
+            surface = s;
+            return context;
+        }
+        vkDestroySurfaceKHR(context->instance(), s, nullptr);
+        return nullptr;
+    };
+    if (options.deviceIndex >= 0) {
+        if (auto context = attempt(options.deviceIndex)) return context;
+        throw std::runtime_error(fmt::format("view: device {} cannot present to this window; choose another with "
+                                             "--device (see 'telescope devices')",
+                                             options.deviceIndex));
+    }
+    if (auto context = attempt(-1)) return context;
+    for (const auto& d : gpu::Context::listDevices()) {
+        if (!d.suitable) continue;
+        try {
+            if (auto context = attempt(int(d.index))) return context;
+        } catch (const std::runtime_error&) {
+            // no swapchain extension on this device: try the next
+        }
+    }
+    throw std::runtime_error("view: no Vulkan device can present to this window; use 'telescope render' instead");
+}
+
+}  // namespace
 
 int runView(const cli::CommonOptions& common, const ViewOptions& optionsIn) {
     installStopHandlers();
@@ -471,14 +521,16 @@ int runView(const cli::CommonOptions& common, const ViewOptions& optionsIn) {
     gpu::ContextOptions contextOptions = cli::contextOptions(common);
     contextOptions.instanceExtensions = Window::requiredInstanceExtensions();
     contextOptions.deviceExtensions = {VK_KHR_SWAPCHAIN_EXTENSION_NAME};
-    gpu::Context context(contextOptions);
+    VkSurfaceKHR surface = VK_NULL_HANDLE;
+    std::unique_ptr<gpu::Context> context = presentingContext(window, contextOptions, surface);
+    Presenter presenter(*context, surface, window.framebufferSize());  // owns the surface from here
     PmfPilotResult pilot;
-    if (resolveAutoPmf(context, scene, o.seed, &pilot) && !common.quiet) fmt::print(stderr, "{}", pilot.summary());
+    if (resolveAutoPmf(*context, scene, o.seed, &pilot) && !common.quiet) fmt::print(stderr, "{}", pilot.summary());
     {
-        Viewer viewer(context, window, std::move(scene), o, common.quiet);
+        Viewer viewer(*context, window, presenter, std::move(scene), o, common.quiet);
         viewer.run();
     }
-    cli::checkValidation(context);
+    cli::checkValidation(*context);
     return 0;
 }
 

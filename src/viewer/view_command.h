@@ -25,7 +25,7 @@ struct ViewOptions {
 struct ScriptedInput {
     uint64_t frame = 0;
     // A key ("s", "3", "Left", "shift+Left"); drag:DX:DY, pan:DX:DY (mouse drags in pixels),
-    // scroll:N; "shot" (a screenshot now, to SHOT-FRAME.png for --screenshot SHOT.png);
+    // scroll:N; resize:W:H (the window); "shot" (a screenshot now, to SHOT-FRAME.png for --screenshot SHOT.png);
     // "interrupt" (raises SIGINT, as Ctrl-C does).
     std::string token;
 };

@@ -74,6 +74,10 @@ VkSurfaceKHR Window::createSurface(VkInstance instance) const {
 bool Window::shouldClose() const { return glfwWindowShouldClose(window_); }
 void Window::requestClose() { glfwSetWindowShouldClose(window_, GLFW_TRUE); }
 void Window::setTitle(const std::string& title) { glfwSetWindowTitle(window_, title.c_str()); }
+void Window::resize(int width, int height) {
+    glfwSetWindowSize(window_, width, height);
+    glfwPollEvents();  // the window system reports the new size
+}
 
 VkExtent2D Window::framebufferSize() const {
     int w = 0, h = 0;

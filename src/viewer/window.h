@@ -39,6 +39,7 @@ public:
     bool shouldClose() const;
     void requestClose();  // what the window's close button does
     void setTitle(const std::string& title);
+    void resize(int width, int height);  // as a user dragging the border would
     VkExtent2D framebufferSize() const;
     // Largest window that fits the screen's work area (leaving room for decorations).
     static VkExtent2D maxWindowSize();
