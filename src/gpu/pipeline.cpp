@@ -56,8 +56,9 @@ bool specialiseSpirv(const std::vector<uint32_t>& code, const std::vector<SpecCo
         .RegisterPass(spvtools::CreateFoldSpecConstantOpAndCompositePass())
         .RegisterPass(spvtools::CreateCCPPass())
         .RegisterPass(spvtools::CreateDeadBranchElimPass())
-        .RegisterPass(spvtools::CreateEliminateDeadFunctionsPass())
-        .RegisterPass(spvtools::CreateAggressiveDCEPass());
+        .RegisterPass(spvtools::CreateEliminateDeadFunctionsPass());
+    // No aggressive dead-code pass: SPIRV-Tools 2023.1's crashes on calls that take buffer
+    // references (the queued level schedule), and it saves little creation time (~0.1 s).
     spvtools::OptimizerOptions options;
     options.set_run_validator(false);  // glslang's output; the validation layer checks the result
     if (!opt.Run(code.data(), code.size(), &out, options) || out.empty()) {
@@ -89,6 +90,13 @@ ComputePipeline::ComputePipeline(const Context& context, std::string shaderName,
                 code = std::move(out);
                 specialised = true;
             }
+        }
+        // Debugging aid: TELESCOPE_DUMP_SPIRV=DIR writes the module the driver gets.
+        if (const char* dump = std::getenv("TELESCOPE_DUMP_SPIRV"); dump && *dump) {
+            std::ofstream f(fmt::format("{}/{}-{:08x}.spv", dump, name_, std::hash<std::string>{}(std::string(
+                                            reinterpret_cast<const char*>(code.data()), code.size() * 4)) & 0xffffffffu),
+                            std::ios::binary);
+            f.write(reinterpret_cast<const char*>(code.data()), std::streamsize(code.size() * 4));
         }
         VkShaderModuleCreateInfo moduleInfo{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
         moduleInfo.codeSize = code.size() * 4;

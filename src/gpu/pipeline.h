@@ -29,7 +29,7 @@ std::string shaderDirectory();
 
 // The module with the specialisation constants' values frozen in and the code they make
 // unreachable removed (SPIRV-Tools: freeze, fold, constant propagation, dead branches, dead
-// functions, dead code). Lavapipe runs its NIR passes over the whole inlined module before it
+// functions). Lavapipe runs its NIR passes over the whole inlined module before it
 // folds specialisation constants, so handing it the specialised module cuts pipeline creation of
 // the path tracer from seconds to a tenth of a second (docs/BENCHMARKS.md). Returns false (and
 // leaves `out` empty) when the optimizer rejects the module; `error` then says why.

@@ -7,6 +7,8 @@
 #include <fmt/format.h>
 #include <glm/gtc/constants.hpp>
 
+#include "core/process_clock.h"
+
 namespace telescope {
 
 namespace {
@@ -83,6 +85,7 @@ void Renderer::restartAtPilotLevel(uint32_t level) {
     stats_.uploadSeconds = kept.uploadSeconds;
     stats_.pipelineSeconds = kept.pipelineSeconds;
     stats_.warmUpSeconds = kept.warmUpSeconds;
+    stats_.firstSampleSeconds = kept.firstSampleSeconds;
 }
 
 void Renderer::render(const RenderRequest& request) {
@@ -112,6 +115,7 @@ void Renderer::render(const RenderRequest& request) {
         auto batchStart = Clock::now();
         auto timings = batch_->submitAndWait();
         double batchSeconds = secondsSince(batchStart);
+        if (stats_.firstSampleSeconds == 0.0) stats_.firstSampleSeconds = secondsSinceProcessStart();
         ++stats_.submits;
         for (const auto& t : timings) {
             stats_.passes[t.name].dispatches++;
