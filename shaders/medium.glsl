@@ -151,7 +151,7 @@ vec3 shadowTransmittance(vec3 o, vec3 d, float tMax, uint medium, bool startOnSu
             tr *= mediumTransmittance(medium - 1u, o, d, end, startOnSurface, true, rng);
         }
         if (!found) return tr;
-        Prim pr = prims[hit.prim];
+        Prim pr = BVH_PRIM(hit.prim);
         if (materials[pr.material].type != kBsdfForward) return vec3(0.0);
         if (tr == vec3(0.0)) return tr;
         vec3 p = o + d * hit.t;

@@ -38,10 +38,23 @@ layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[
 layout(std430, binding = kBindingMaterials) readonly buffer MaterialBuffer { MaterialGpu materials[]; };
 layout(std430, binding = kBindingLights) readonly buffer LightBuffer { LightGpu lights[]; };
 
+layout(constant_id = kSpecSceneInUniforms) const bool kSceneInUniforms = false;
+layout(std140, binding = kBindingBvhUniform) uniform BvhUniform { BvhNode uniformNodes[kMaxUniformNodes]; };
+layout(std140, binding = kBindingPrimsUniform) uniform PrimUniform { Prim uniformPrims[kMaxUniformPrims]; };
+
 layout(push_constant) uniform Push { PathTracePush pc; };
 
-#define BVH_NODE(i) nodes[i]
-#define BVH_PRIM(i) prims[i]
+// (Functions, not ?: : the uniform and storage structs are distinct SPIR-V types.)
+BvhNode sceneNode(uint i) {
+    if (kSceneInUniforms) return uniformNodes[i];
+    return nodes[i];
+}
+Prim scenePrim(uint i) {
+    if (kSceneInUniforms) return uniformPrims[i];
+    return prims[i];
+}
+#define BVH_NODE(i) sceneNode(i)
+#define BVH_PRIM(i) scenePrim(i)
 #include "shared/intersect.h"
 #include "medium.glsl"
 #include "path_tracer.glsl"

@@ -62,7 +62,7 @@ bool sampleLight(vec3 p, inout Rng rng, out LightSample ls) {
         ls.weight = light.radiance / ls.pdf;
     } else {
         // Area light: a uniform point on the emissive prim.
-        Prim pr = prims[light.prim];
+        Prim pr = BVH_PRIM(light.prim);
         vec3 q, nq;
         if (kHasSpheres && pr.type == kPrimSphere) {
             nq = sampleUniformSphere(u1, u2);
@@ -210,7 +210,7 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         }
         return false;
     }
-    Prim pr = prims[hit.prim];
+    Prim pr = BVH_PRIM(hit.prim);
     vec3 p = s.origin + s.dir * hit.t;
     vec3 ng = pr.n;
     if (kHasSpheres && pr.type == kPrimSphere) {

@@ -101,7 +101,16 @@ CONST uint kBindingLights = 3u;
 CONST uint kBindingMedia = 4u;      // MediumGpu[]
 CONST uint kBindingGridData = 5u;   // float voxel densities of every grid medium
 CONST uint kBindingPrimMedia = 6u;  // uint per prim slot: media on its two sides (kPrimMedia*)
-CONST uint kPathTraceBindingCount = 7u;
+// The BVH nodes and primitives again, as uniform buffers (lavapipe loads from a uniform buffer
+// about 1.8x as fast as from a storage buffer): read from there when they fit
+// (kSpecSceneInUniforms). The scene buffers are padded to kUniformSceneBytes so both bindings
+// always have a full range.
+CONST uint kBindingBvhUniform = 7u;
+CONST uint kBindingPrimsUniform = 8u;
+CONST uint kPathTraceBindingCount = 9u;
+CONST uint kUniformSceneBytes = 65536u;  // maxUniformBufferRange on lavapipe; the Vulkan minimum is 16384
+CONST uint kMaxUniformNodes = 2048u;     // kUniformSceneBytes / sizeof(BvhNode)
+CONST uint kMaxUniformPrims = 1024u;     // kUniformSceneBytes / sizeof(Prim)
 CONST uint kSceneBindingCount = 4u;      // photon_trace and gather: the scene only (no media)
 
 // Specialisation constant ids: features a scene lacks are folded away by the compiler.
@@ -125,6 +134,7 @@ CONST uint kSpecRayEpsilon = 15u;        // absolute ray offset, from the scene 
 CONST uint kSpecPilot = 16u;             // pmf pilot: every sample takes the level pc.pilotLevel
 CONST uint kSpecLevelSchedule = 17u;     // kLevelSchedule*: how per-sample levels are laid out on lanes
 CONST uint kSpecTestPmfWeight = 18u;     // test-only: scales every 1 / p(j) (debias.test_pmf_weight)
+CONST uint kSpecSceneInUniforms = 19u;   // BVH nodes and primitives read from the uniform bindings
 
 // Participating media, ids 32..47 (shaders/medium.glsl).
 CONST uint kSpecHasMedia = 32u;          // media or forward (index-matched) boundaries present

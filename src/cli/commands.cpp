@@ -1,4 +1,3 @@
-#include <OpenImageIO/imageio.h>  // before anything that may pull in X11
 
 #include "cli/commands.h"
 #include "cli/outputs.h"
@@ -160,6 +159,7 @@ void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Cont
     j["resolution"] = {film.width(), film.height()};
     j["wall_seconds"] = stats.wallSeconds;
     j["setup_seconds"] = stats.setupSeconds;
+    j["first_sample_seconds"] = stats.firstSampleSeconds;
     j["setup"] = {{"scene_seconds", stats.sceneSeconds},
                   {"upload_seconds", stats.uploadSeconds},
                   {"pipeline_seconds", stats.pipelineSeconds},

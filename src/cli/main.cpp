@@ -11,7 +11,6 @@
 //   telescope devices
 //
 // Exit codes: 0 success, 2 bad input (one line naming the file and the key), 1 runtime failure.
-#include <OpenImageIO/imageio.h>  // before anything that may pull in X11
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>

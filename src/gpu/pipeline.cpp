@@ -1,5 +1,6 @@
 #include "gpu/pipeline.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -56,8 +57,9 @@ bool specialiseSpirv(const std::vector<uint32_t>& code, const std::vector<SpecCo
         .RegisterPass(spvtools::CreateFoldSpecConstantOpAndCompositePass())
         .RegisterPass(spvtools::CreateCCPPass())
         .RegisterPass(spvtools::CreateDeadBranchElimPass())
-        .RegisterPass(spvtools::CreateEliminateDeadFunctionsPass())
-        .RegisterPass(spvtools::CreateAggressiveDCEPass());
+        .RegisterPass(spvtools::CreateEliminateDeadFunctionsPass());
+    // No aggressive dead-code pass: SPIRV-Tools 2023.1's crashes on calls that take buffer
+    // references (the queued level schedule), and it saves little creation time (~0.1 s).
     spvtools::OptimizerOptions options;
     options.set_run_validator(false);  // glslang's output; the validation layer checks the result
     if (!opt.Run(code.data(), code.size(), &out, options) || out.empty()) {
@@ -76,8 +78,10 @@ bool hostSpecialisation() {
 // ---- ComputePipeline ----
 
 ComputePipeline::ComputePipeline(const Context& context, std::string shaderName, uint32_t bufferCount,
-                                 uint32_t pushConstantBytes, const std::vector<SpecConstant>& spec)
-    : context_(context), name_(std::move(shaderName)), bufferCount_(bufferCount), pushBytes_(pushConstantBytes) {
+                                 uint32_t pushConstantBytes, const std::vector<SpecConstant>& spec,
+                                 uint32_t uniformBindings)
+    : context_(context), name_(std::move(shaderName)), bufferCount_(bufferCount), pushBytes_(pushConstantBytes),
+      uniformBindings_(uniformBindings) {
     VkDevice device = context.device();
     try {
         auto code = readSpirv(shaderDirectory() + "/" + name_ + ".spv");
@@ -90,14 +94,27 @@ ComputePipeline::ComputePipeline(const Context& context, std::string shaderName,
                 specialised = true;
             }
         }
+        // Debugging aid: TELESCOPE_DUMP_SPIRV=DIR writes the module the driver gets.
+        if (const char* dump = std::getenv("TELESCOPE_DUMP_SPIRV"); dump && *dump) {
+            std::ofstream f(fmt::format("{}/{}-{:08x}.spv", dump, name_, std::hash<std::string>{}(std::string(
+                                            reinterpret_cast<const char*>(code.data()), code.size() * 4)) & 0xffffffffu),
+                            std::ios::binary);
+            f.write(reinterpret_cast<const char*>(code.data()), std::streamsize(code.size() * 4));
+        }
         VkShaderModuleCreateInfo moduleInfo{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
         moduleInfo.codeSize = code.size() * 4;
         moduleInfo.pCode = code.data();
         VK_CHECK(vkCreateShaderModule(device, &moduleInfo, nullptr, &module_));
 
         std::vector<VkDescriptorSetLayoutBinding> bindings(bufferCount);
-        for (uint32_t i = 0; i < bufferCount; ++i)
-            bindings[i] = {i, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+        auto typeOf = [&](uint32_t i) {
+            return (uniformBindings >> i) & 1u ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        };
+        uint32_t uniformCount = 0;
+        for (uint32_t i = 0; i < bufferCount; ++i) {
+            bindings[i] = {i, typeOf(i), 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+            uniformCount += typeOf(i) == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+        }
         VkDescriptorSetLayoutCreateInfo setInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
         setInfo.bindingCount = bufferCount;
         setInfo.pBindings = bindings.data();
@@ -128,11 +145,13 @@ ComputePipeline::ComputePipeline(const Context& context, std::string shaderName,
         VK_CHECK(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_));
 
         if (bufferCount) {
-            VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, bufferCount};
+            std::vector<VkDescriptorPoolSize> sizes;
+            if (bufferCount > uniformCount) sizes.push_back({VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, bufferCount - uniformCount});
+            if (uniformCount) sizes.push_back({VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, uniformCount});
             VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
             poolInfo.maxSets = 1;
-            poolInfo.poolSizeCount = 1;
-            poolInfo.pPoolSizes = &size;
+            poolInfo.poolSizeCount = uint32_t(sizes.size());
+            poolInfo.pPoolSizes = sizes.data();
             VK_CHECK(vkCreateDescriptorPool(device, &poolInfo, nullptr, &pool_));
             VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
             alloc.descriptorPool = pool_;
@@ -166,9 +185,20 @@ void ComputePipeline::bindBuffers(const std::vector<const Buffer*>& buffers) {
     if (buffers.size() != bufferCount_)
         throw std::logic_error(fmt::format("pipeline {} takes {} buffers, got {}", name_, bufferCount_, buffers.size()));
     const VkDeviceSize maxRange = context_.properties().limits.maxStorageBufferRange;
+    const VkDeviceSize maxUniformRange = context_.properties().limits.maxUniformBufferRange;
     std::vector<VkDescriptorBufferInfo> infos(buffers.size());
     std::vector<VkWriteDescriptorSet> writes(buffers.size());
     for (size_t i = 0; i < buffers.size(); ++i) {
+        if ((uniformBindings_ >> i) & 1u) {
+            infos[i] = {buffers[i]->handle(), 0, std::min(buffers[i]->size(), maxUniformRange)};
+            writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+            writes[i].dstSet = set_;
+            writes[i].dstBinding = uint32_t(i);
+            writes[i].descriptorCount = 1;
+            writes[i].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+            writes[i].pBufferInfo = &infos[i];
+            continue;
+        }
         if (buffers[i]->size() > maxRange)
             throw std::runtime_error(fmt::format(
                 "buffer '{}' ({} bytes) exceeds the storage-buffer binding limit ({} bytes); reach it by device address",

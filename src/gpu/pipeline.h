@@ -29,7 +29,7 @@ std::string shaderDirectory();
 
 // The module with the specialisation constants' values frozen in and the code they make
 // unreachable removed (SPIRV-Tools: freeze, fold, constant propagation, dead branches, dead
-// functions, dead code). Lavapipe runs its NIR passes over the whole inlined module before it
+// functions). Lavapipe runs its NIR passes over the whole inlined module before it
 // folds specialisation constants, so handing it the specialised module cuts pipeline creation of
 // the path tracer from seconds to a tenth of a second (docs/BENCHMARKS.md). Returns false (and
 // leaves `out` empty) when the optimizer rejects the module; `error` then says why.
@@ -42,13 +42,16 @@ bool hostSpecialisation();
 
 class ComputePipeline {
 public:
+    // Binding i is a storage buffer, or a uniform buffer when bit i of uniformBindings is set.
     ComputePipeline(const Context& context, std::string shaderName, uint32_t bufferCount,
-                    uint32_t pushConstantBytes, const std::vector<SpecConstant>& spec = {});
+                    uint32_t pushConstantBytes, const std::vector<SpecConstant>& spec = {},
+                    uint32_t uniformBindings = 0);
     ~ComputePipeline();
     ComputePipeline(const ComputePipeline&) = delete;
     ComputePipeline& operator=(const ComputePipeline&) = delete;
 
-    // Points binding i at buffers[i] (whole buffer; each must fit maxStorageBufferRange).
+    // Points binding i at buffers[i] (whole buffer; each must fit maxStorageBufferRange; a uniform
+    // binding sees the first min(size, maxUniformBufferRange) bytes).
     void bindBuffers(const std::vector<const Buffer*>& buffers);
 
     const std::string& name() const { return name_; }
@@ -62,7 +65,7 @@ private:
 
     const Context& context_;
     std::string name_;
-    uint32_t bufferCount_ = 0, pushBytes_ = 0;
+    uint32_t bufferCount_ = 0, pushBytes_ = 0, uniformBindings_ = 0;
     VkShaderModule module_ = VK_NULL_HANDLE;
     VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
     VkPipelineLayout layout_ = VK_NULL_HANDLE;

@@ -185,6 +185,7 @@ GpuScene buildGpuScene(const Scene& scene) {
     if (out.media.empty()) out.media.push_back({});
     if (out.gridData.empty()) out.gridData.push_back(0.0f);
     while (out.primMedia.size() < out.prims.size()) out.primMedia.push_back(shader::kPrimMediaNone);
+    f.fitsUniforms = out.nodes.size() <= shader::kMaxUniformNodes && out.prims.size() <= shader::kMaxUniformPrims;
     return out;
 }
 

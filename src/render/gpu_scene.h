@@ -23,6 +23,7 @@ struct SceneFeatures {
     bool media = false;         // participating media or forward (medium boundary) surfaces
     bool grids = false;         // grid media
     uint32_t mediumCount = 0;
+    bool fitsUniforms = false;  // nodes and prims fit the path tracer's uniform bindings
 };
 
 struct GpuScene {

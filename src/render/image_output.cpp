@@ -1,38 +1,45 @@
-// OpenImageIO first: it must come before any X11 header.
-#include <OpenImageIO/imageio.h>
-
+// EXR through OpenEXR and PNG through libpng: both light to load. (OpenImageIO pulled in about 260
+// shared libraries, whose relocation cost every process, test and render about 0.6 s of CPU at
+// start-up; docs/BENCHMARKS.md.)
 #include "render/image_output.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <stdexcept>
 
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
 #include <fmt/format.h>
+#include <png.h>
 
 namespace telescope {
 
 namespace {
 
-// Temporary file next to the target, with the same extension so OIIO picks the same format.
+// Temporary file next to the target, with the same extension.
 std::string temporaryPath(const std::string& path) {
     std::filesystem::path p(path);
     return (p.parent_path() / ("." + p.stem().string() + ".partial" + p.extension().string())).string();
 }
 
-void writeImage(const std::string& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc format, const void* data) {
+// Writes the image to a temporary file with `write(tmp)`, then renames it into place; on failure
+// the temporary file is removed and the error names the target.
+template <class Write>
+void writeAtomically(const std::string& path, Write&& write) {
     std::string tmp = temporaryPath(path);
-    auto out = OIIO::ImageOutput::create(tmp);
-    if (!out) throw std::runtime_error(fmt::format("{}: cannot write this image format ({})", path, OIIO::geterror()));
-    bool ok = out->open(tmp, spec) && out->write_image(format, data) && out->close();
-    if (!ok) {
-        std::string err = out->geterror();
-        out.reset();
+    try {
+        write(tmp);
+    } catch (const std::exception& e) {
         std::remove(tmp.c_str());
-        throw std::runtime_error(fmt::format("{}: write failed: {}", path, err));
+        throw std::runtime_error(fmt::format("{}: write failed: {}", path, e.what()));
     }
-    out.reset();
     std::error_code ec;
     std::filesystem::rename(tmp, path, ec);
     if (ec) {
@@ -51,13 +58,12 @@ float srgbEncode(float linear) {
 void writeExr(const std::string& path, const Film& film, const ImageMetadata& metadata) {
     using namespace shader;
     const int channels = 18;
-    OIIO::ImageSpec spec(int(film.width()), int(film.height()), channels, OIIO::TypeDesc::FLOAT);
-    spec.channelnames = {"R", "G", "B", "base.R", "base.G", "base.B",
-                         "correction.R", "correction.G", "correction.B", "variance.R", "variance.G", "variance.B",
-                         "correction_positive.R", "correction_positive.G", "correction_positive.B",
-                         "correction_negative.R", "correction_negative.G", "correction_negative.B"};
-    spec.attribute("compression", "zip");
-    for (const auto& [key, value] : metadata.entries) spec.attribute(key, value);
+    static const char* const names[channels] = {
+        "R", "G", "B", "base.R", "base.G", "base.B",
+        "correction.R", "correction.G", "correction.B", "variance.R", "variance.G", "variance.B",
+        "correction_positive.R", "correction_positive.G", "correction_positive.B",
+        "correction_negative.R", "correction_negative.G", "correction_negative.B"};
+    const int width = int(film.width()), height = int(film.height());
 
     std::vector<float> data(film.pixelCount() * channels);
     for (size_t i = 0; i < film.pixelCount(); ++i) {
@@ -77,16 +83,39 @@ void writeExr(const std::string& path, const Film& film, const ImageMetadata& me
             px[15 + c] = float(neg[c]);
         }
     }
-    writeImage(path, spec, OIIO::TypeDesc::FLOAT, data.data());
+    writeAtomically(path, [&](const std::string& tmp) {
+        Imf::Header header(width, height);
+        header.compression() = Imf::ZIP_COMPRESSION;
+        for (const auto& [key, value] : metadata.entries) header.insert(key, Imf::StringAttribute(value));
+        Imf::FrameBuffer frame;
+        const size_t xStride = sizeof(float) * channels, yStride = xStride * size_t(width);
+        for (int c = 0; c < channels; ++c) {
+            header.channels().insert(names[c], Imf::Channel(Imf::FLOAT));
+            frame.insert(names[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(data.data() + c), xStride, yStride));
+        }
+        Imf::OutputFile file(tmp.c_str(), header);
+        file.setFrameBuffer(frame);
+        file.writePixels(height);
+    });
 }
 
 void writeSrgbPng(const std::string& path, int width, int height, const std::vector<float>& rgb) {
     if (width <= 0 || height <= 0 || rgb.size() != size_t(width) * size_t(height) * 3)
         throw std::invalid_argument(fmt::format("{}: {} floats is not a {}x{} RGB image", path, rgb.size(), width, height));
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
     std::vector<uint8_t> data(rgb.size());
     for (size_t i = 0; i < rgb.size(); ++i) data[i] = uint8_t(std::lround(255.0f * srgbEncode(rgb[i])));
-    writeImage(path, spec, OIIO::TypeDesc::UINT8, data.data());
+    writeAtomically(path, [&](const std::string& tmp) {
+        png_image image{};
+        image.version = PNG_IMAGE_VERSION;
+        image.width = png_uint_32(width);
+        image.height = png_uint_32(height);
+        image.format = PNG_FORMAT_RGB;
+        if (!png_image_write_to_file(&image, tmp.c_str(), 0, data.data(), 0, nullptr)) {
+            std::string err = image.message;
+            png_image_free(&image);
+            throw std::runtime_error(err);
+        }
+    });
 }
 
 void writePngPreview(const std::string& path, const Film& film) {
@@ -99,26 +128,31 @@ void writePngPreview(const std::string& path, const Film& film) {
 }
 
 RgbImage readExrChannels(const std::string& path, const std::vector<std::string>& channels) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw std::runtime_error(fmt::format("{}: cannot open ({})", path, OIIO::geterror()));
-    const OIIO::ImageSpec& spec = in->spec();
-    std::vector<float> all(size_t(spec.width) * spec.height * spec.nchannels);
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()))
-        throw std::runtime_error(fmt::format("{}: read failed: {}", path, in->geterror()));
     RgbImage img;
-    img.width = spec.width;
-    img.height = spec.height;
-    img.channelNames = spec.channelnames;
-    std::vector<int> index;
-    for (const auto& name : channels) {
-        auto it = std::find(spec.channelnames.begin(), spec.channelnames.end(), name);
-        if (it == spec.channelnames.end()) throw std::runtime_error(fmt::format("{}: no channel {}", path, name));
-        index.push_back(int(it - spec.channelnames.begin()));
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imf::Header& header = file.header();
+        for (auto it = header.channels().begin(); it != header.channels().end(); ++it)
+            img.channelNames.push_back(it.name());
+        for (const auto& name : channels)
+            if (!header.channels().findChannel(name)) throw std::runtime_error(fmt::format("no channel {}", name));
+        const Imath::Box2i window = header.dataWindow();
+        img.width = window.max.x - window.min.x + 1;
+        img.height = window.max.y - window.min.y + 1;
+        const size_t n = channels.size();
+        img.pixels.assign(size_t(img.width) * size_t(img.height) * n, 0.0f);
+        const size_t xStride = sizeof(float) * n, yStride = xStride * size_t(img.width);
+        // The slices' base is the address of pixel (0, 0), which may lie outside the data window.
+        char* origin = reinterpret_cast<char*>(img.pixels.data()) - ptrdiff_t(window.min.x) * ptrdiff_t(xStride) -
+                       ptrdiff_t(window.min.y) * ptrdiff_t(yStride);
+        Imf::FrameBuffer frame;
+        for (size_t c = 0; c < n; ++c)
+            frame.insert(channels[c], Imf::Slice(Imf::FLOAT, origin + c * sizeof(float), xStride, yStride));
+        file.setFrameBuffer(frame);
+        file.readPixels(window.min.y, window.max.y);
+    } catch (const std::exception& e) {
+        throw std::runtime_error(fmt::format("{}: cannot read: {}", path, e.what()));
     }
-    img.pixels.resize(size_t(spec.width) * spec.height * channels.size());
-    for (size_t p = 0; p < size_t(spec.width) * spec.height; ++p)
-        for (size_t c = 0; c < channels.size(); ++c)
-            img.pixels[p * channels.size() + c] = all[p * spec.nchannels + index[c]];
     return img;
 }
 

@@ -96,6 +96,8 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
             "no debias block: plain I(k)");
     feature("media", f.media, "media or forward boundaries present", "no participating media");
     feature("grid media", f.grids, "voxel grid media present", "no grid media");
+    feature("uniform scene", f.fitsUniforms, "BVH nodes and primitives read from uniform buffers (faster loads)",
+            "more than 2048 BVH nodes or 1024 primitives: read from storage buffers");
 
     plan.featuresOf = "path_trace";
     plan.pathTraceSpec = {
@@ -118,6 +120,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecPilot, in.pilotLevel != kNoPilotLevel},
         {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},
         {kSpecTestPmfWeight, gpu::specFloat(in.debias.testPmfWeight)},
+        {kSpecSceneInUniforms, f.fitsUniforms},
         {kSpecHasMedia, f.media},
         {kSpecTrEstimator, uint32_t(in.transmittance.type)},
         {kSpecTrLevel, in.transmittance.level},
@@ -138,8 +141,10 @@ public:
     PathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan, const RenderBuffers& b,
                     uint32_t seed)
         : pipeline_(context, "path_trace", shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
-                    plan.pathTraceSpec) {
-        pipeline_.bindBuffers({b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia});
+                    deviceSpec(context, plan.pathTraceSpec),
+                    (1u << shader::kBindingBvhUniform) | (1u << shader::kBindingPrimsUniform)) {
+        pipeline_.bindBuffers(
+            {b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims});
         const Camera& cam = scene.camera;
         push_.cameraPosition = cam.position;
         push_.cameraRight = cam.right;
@@ -192,6 +197,14 @@ public:
     }
 
 private:
+    // The plan's constants, without the uniform scene on a device whose uniform buffers are smaller.
+    static std::vector<gpu::SpecConstant> deviceSpec(const gpu::Context& context, std::vector<gpu::SpecConstant> spec) {
+        if (context.properties().limits.maxUniformBufferRange < shader::kUniformSceneBytes)
+            for (auto& s : spec)
+                if (s.id == shader::kSpecSceneInUniforms) s.value = 0;
+        return spec;
+    }
+
     // ---- Queued level schedule: the level queue and its passes (gpu_types.h) ----
     void makeLevelQueue(gpu::Context& context, const RenderPlan& plan, uint64_t capacity) {
         if (capacity >= (uint64_t(1) << 27))

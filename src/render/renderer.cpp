@@ -7,6 +7,8 @@
 #include <fmt/format.h>
 #include <glm/gtc/constants.hpp>
 
+#include "core/process_clock.h"
+
 namespace telescope {
 
 namespace {
@@ -26,13 +28,14 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
     auto phase = Clock::now();
 
     // ---- Scene buffers ----
-    auto makeBuffer = [&](const auto& v, const char* name) {
-        gpu::Buffer b(context, v.size() * sizeof(v[0]), name);
+    auto makeBuffer = [&](const auto& v, const char* name, VkDeviceSize minBytes = 0) {
+        gpu::Buffer b(context, std::max<VkDeviceSize>(v.size() * sizeof(v[0]), minBytes), name);
         b.upload(v);
         return b;
     };
-    prims_ = makeBuffer(gpuScene_.prims, "prims");
-    nodes_ = makeBuffer(gpuScene_.nodes, "bvh nodes");
+    // Padded: the path tracer binds them as uniform buffers of this size too (gpu_types.h).
+    prims_ = makeBuffer(gpuScene_.prims, "prims", shader::kUniformSceneBytes);
+    nodes_ = makeBuffer(gpuScene_.nodes, "bvh nodes", shader::kUniformSceneBytes);
     materials_ = makeBuffer(gpuScene_.materials, "materials");
     lights_ = makeBuffer(gpuScene_.lights, "lights");
     media_ = makeBuffer(gpuScene_.media, "media");  // dummies without media
@@ -83,6 +86,7 @@ void Renderer::restartAtPilotLevel(uint32_t level) {
     stats_.uploadSeconds = kept.uploadSeconds;
     stats_.pipelineSeconds = kept.pipelineSeconds;
     stats_.warmUpSeconds = kept.warmUpSeconds;
+    stats_.firstSampleSeconds = kept.firstSampleSeconds;
 }
 
 bool Renderer::restartWithCamera(const Camera& camera) {
@@ -128,6 +132,7 @@ void Renderer::render(const RenderRequest& request) {
         auto batchStart = Clock::now();
         auto timings = batch_->submitAndWait();
         double batchSeconds = secondsSince(batchStart);
+        if (stats_.firstSampleSeconds == 0.0) stats_.firstSampleSeconds = secondsSinceProcessStart();
         ++stats_.submits;
         for (const auto& t : timings) {
             stats_.passes[t.name].dispatches++;

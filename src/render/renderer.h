@@ -53,6 +53,9 @@ struct RenderStats {
     // The setup's parts: BVH and GPU scene build, buffer upload, pipeline creation (SPIR-V to the
     // driver's IR), and the warm-up dispatches (lavapipe compiles a pipeline at its first dispatch).
     double sceneSeconds = 0.0, uploadSeconds = 0.0, pipelineSeconds = 0.0, warmUpSeconds = 0.0;
+    // Seconds from the start of the process (shared libraries loaded, device created, scene read,
+    // setup) until the first batch of samples was done; 0 before it, negative where unknown.
+    double firstSampleSeconds = 0.0;
     uint64_t samplesPerPixel = 0;
     uint64_t submits = 0;
     uint64_t photonPaths = 0;    // photon mapping: photon paths traced, all passes

@@ -1,4 +1,3 @@
-#include <OpenImageIO/imageio.h>  // before anything that may pull in X11
 
 #include "study/converge.h"
 
