@@ -1,6 +1,6 @@
-#include <OpenImageIO/imageio.h>  // before anything that may pull in X11
-
 #include "viewer/screenshot.h"
+
+#include <png.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -10,6 +10,8 @@
 
 namespace telescope::viewer {
 
+// The swapchain's 8-bit RGBA as an RGB PNG (libpng's simplified API), written to a temporary
+// file and moved into place.
 void writeScreenshotPng(const std::string& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgba) {
     if (rgba.size() != size_t(width) * height * 4)
         throw std::logic_error(fmt::format("{}: {} bytes is not a {}x{} RGBA image", path, rgba.size(), width, height));
@@ -19,16 +21,17 @@ void writeScreenshotPng(const std::string& path, uint32_t width, uint32_t height
 
     std::filesystem::path p(path);
     const std::string tmp = (p.parent_path() / ("." + p.stem().string() + ".partial.png")).string();
-    OIIO::ImageSpec spec(int(width), int(height), 3, OIIO::TypeDesc::UINT8);
-    auto out = OIIO::ImageOutput::create(tmp);
-    if (!out) throw std::runtime_error(fmt::format("{}: cannot write PNG ({})", path, OIIO::geterror()));
-    if (!(out->open(tmp, spec) && out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) && out->close())) {
-        std::string err = out->geterror();
-        out.reset();
+    png_image image{};
+    image.version = PNG_IMAGE_VERSION;
+    image.width = png_uint_32(width);
+    image.height = png_uint_32(height);
+    image.format = PNG_FORMAT_RGB;
+    if (!png_image_write_to_file(&image, tmp.c_str(), 0, rgb.data(), 0, nullptr)) {
+        std::string err = image.message;
+        png_image_free(&image);
         std::remove(tmp.c_str());
         throw std::runtime_error(fmt::format("{}: write failed: {}", path, err));
     }
-    out.reset();
     std::error_code ec;
     std::filesystem::rename(tmp, path, ec);
     if (ec) {
