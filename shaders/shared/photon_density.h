@@ -1,4 +1,4 @@
-// Photon density estimation (ESTIMATORS.md section 3): kernels, the radius levels of the
+// Photon density estimation (docs/PHOTON-MAPPING.md): kernels, the radius levels of the
 // telescope, their pmf, and the hash grid's cell arithmetic. Compiled as GLSL and as C++; the
 // CPU tests (tests/unit/photon_density_test.cpp) check every formula here.
 //
