@@ -9,8 +9,7 @@ Film::Film(uint32_t width, uint32_t height) : width_(width), height_(height) {
 }
 
 double Film::samplesOf(size_t pixel) const {
-    const double own = sums_[shader::kChannelEstimateSq][pixel].w;
-    return own > 0.0 ? own : perPixelCounts_ ? 0.0 : double(spp_);
+    return perPixelCounts_ ? sums_[shader::kChannelEstimateSq][pixel].w : double(spp_);
 }
 
 glm::dvec3 Film::mean(uint32_t channel, size_t pixel) const {
