@@ -387,14 +387,19 @@ TEST(SceneLoader, PhotonMapSettings) {
     ASSERT_EQ(s.ignoredKeys.size(), 1u);  // Tungsten's k-NN count is not used
     EXPECT_EQ(s.ignoredKeys[0], "integrator.gather_photon_count");
 
-    // A debias block without a pmf takes the power-law levels of the radius schedule.
+    // A debias block without a pmf takes the block defaults (docs/PHOTON-MAPPING.md): geometric
+    // r = 0.7, s = 1/sqrt(2), m = 3, K = 20 (s^K < 1e-3), uniform schedule.
     s = load(R"({"integrator": {"type": "progressive_photon_map", "gather_radius": 0.1, "alpha": 0.5,
         "debias": {"estimator": "single_term"}}})");
     EXPECT_EQ(s.integrator.type, IntegratorType::ProgressivePhotonMap);
     EXPECT_EQ(s.integrator.photon.kernel, PhotonKernel::Cone);
     EXPECT_EQ(s.integrator.photon.directLighting, DirectLighting::NextEvent);
-    EXPECT_EQ(s.integrator.debias.pmf.type, PmfType::PowerLaw);
-    EXPECT_FLOAT_EQ(s.integrator.debias.pmf.alpha, 0.5f);
+    EXPECT_EQ(s.integrator.debias.pmf.type, PmfType::Geometric);
+    EXPECT_FLOAT_EQ(s.integrator.debias.pmf.r, 0.7f);
+    EXPECT_NEAR(s.integrator.debias.photon.areaRatio, 0.70710678f, 1e-6f);
+    EXPECT_EQ(s.integrator.debias.photon.photonGrowth, 3u);
+    EXPECT_EQ(s.integrator.debias.photon.levelCap, 20u);
+    EXPECT_EQ(s.integrator.debias.schedule, LevelSchedule::Uniform);
 }
 
 // ---- Overrides ----
