@@ -104,6 +104,12 @@ void writeSrgbPng(const std::string& path, int width, int height, const std::vec
         throw std::invalid_argument(fmt::format("{}: {} floats is not a {}x{} RGB image", path, rgb.size(), width, height));
     std::vector<uint8_t> data(rgb.size());
     for (size_t i = 0; i < rgb.size(); ++i) data[i] = uint8_t(std::lround(255.0f * srgbEncode(rgb[i])));
+    writeRgb8Png(path, width, height, data);
+}
+
+void writeRgb8Png(const std::string& path, int width, int height, const std::vector<uint8_t>& data) {
+    if (width <= 0 || height <= 0 || data.size() != size_t(width) * size_t(height) * 3)
+        throw std::invalid_argument(fmt::format("{}: {} bytes is not a {}x{} RGB image", path, data.size(), width, height));
     writeAtomically(path, [&](const std::string& tmp) {
         png_image image{};
         image.version = PNG_IMAGE_VERSION;

@@ -22,6 +22,9 @@ void writePngPreview(const std::string& path, const Film& film);
 
 // Linear RGB floats (row-major) to an 8-bit sRGB PNG, clipped to [0, 1] for display only.
 void writeSrgbPng(const std::string& path, int width, int height, const std::vector<float>& rgb);
+// 8-bit RGB bytes (row-major, already encoded) to a PNG, written to a temporary file and moved
+// into place.
+void writeRgb8Png(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb);
 
 // Reads back the RGB estimate of an EXR written by writeExr (tests and tools).
 struct RgbImage {
