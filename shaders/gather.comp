@@ -14,7 +14,7 @@
 
 #include "shared/gpu_types.h"
 #include "shared/rng.h"
-#include "shared/sampling.h"
+#include "shared/camera.h"
 #include "shared/photon_density.h"
 #include "photon_scene.glsl"
 #include "photon_gather.glsl"
@@ -25,41 +25,22 @@ layout(local_size_x = kGatherGroupSize, local_size_y = kGatherGroupSize) in;
 layout(constant_id = kSpecFilter) const uint kFilter = kFilterTent;
 layout(constant_id = kSpecPhotonEstimator) const uint kEstimator = kPhotonBiased;
 layout(constant_id = kSpecPhotonKernel) const uint kKernel = kKernelCone;
-layout(constant_id = kSpecPhotonSchedule) const uint kSchedule = kPhotonScheduleUniform;
-
-layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4ArrayRef { vec4 v[]; };
+layout(constant_id = kSpecPhotonSchedule) const uint kSchedule = kLevelScheduleUniform;
 
 layout(push_constant) uniform Push { GatherPush pc; };
 
-// Next-event estimation at a Lambertian point: one light picked by power, one shadow ray.
+// Next-event estimation at a Lambertian point: one light picked by power (scene_common.glsl), one
+// shadow ray. No MIS: the camera chain stops at this vertex, so no BSDF sample could find the light.
 vec3 directLight(vec3 p, vec3 ng, vec3 n, vec3 albedo, inout Rng rng) {
-    uint li = pickLight(rngNext(rng));
-    LightGpu light = lights[li];
-    float u1 = rngNext(rng), u2 = rngNext(rng);
-    vec3 wi;
-    float dist;
-    vec3 value;
-    if (light.type == kLightPoint) {
-        vec3 d = light.position - p;
-        dist = length(d);
-        wi = d / dist;
-        value = light.radiance * max(dot(n, wi), 0.0) / (dist * dist * light.pmf);
-    } else {
-        Prim pr = prims[light.prim];
-        vec3 q, nq;
-        sampleLightPoint(pr, u1, u2, q, nq);
-        vec3 d = q - p;
-        dist = length(d);
-        wi = d / max(dist, 1e-30);
-        float cosS = dot(n, wi);
-        float cosL = -dot(wi, nq);
-        if (cosS <= 0.0 || cosL <= 0.0 || !(dist > 0.0)) return vec3(0.0);
-        value = light.radiance * cosS * cosL * pr.area / (dist * dist * light.pmf);
-        dist *= 1.0 - 1e-4;  // stop short of the light itself
-    }
+    LightSample ls;
+    if (!sampleLight(p, rng, ls)) return vec3(0.0);
+    float cosS = dot(n, ls.wi);
+    if (cosS <= 0.0) return vec3(0.0);
+    vec3 value = ls.weight * cosS;
     if (!any(greaterThan(value, vec3(0.0)))) return vec3(0.0);
-    vec3 o = offsetRayOrigin(p, ng, wi);
-    if (traceAny(o, wi, max(dist - length(o - p), 0.0))) return vec3(0.0);
+    vec3 o = offsetRayOrigin(p, ng, ls.wi);
+    float tMax = ls.dist < kInfinity ? max(ls.dist - length(o - p), 0.0) : kInfinity;
+    if (traceAny(o, ls.wi, tMax)) return vec3(0.0);
     return albedo * kInvPi * value;
 }
 
@@ -68,15 +49,6 @@ vec3 directLight(vec3 p, vec3 ng, vec3 n, vec3 albedo, inout Rng rng) {
 // the second: passes done), then the kernel sums of the slices before the last.
 const uint kBlockBaseHi = 0u, kBlockBaseLo = 1u, kBlockCorrHi = 2u, kBlockCorrLo = 3u;
 const uint kSliceBase = 4u, kSliceDifference = 5u;
-
-void addCompensated(Vec4ArrayRef b, uint i, vec3 value) {
-    vec3 hi = b.v[i].xyz;
-    precise vec3 s = hi + value;
-    precise vec3 bp = s - hi;
-    precise vec3 err = (hi - (s - bp)) + (value - bp);
-    b.v[i].xyz = s;
-    b.v[i + 1u].xyz += err;
-}
 
 uint passSeed(uint seed, uint passInBlock) { return passInBlock == 0u ? seed : seed ^ pcgHash(passInBlock); }
 
@@ -87,19 +59,17 @@ void main() {
     if (map.h.storedCount > map.h.capacity) return;  // photons were dropped: the host repeats the pass
     if (map.h.maxBucket > pc.sliceCount * kGatherSlicePhotons) return;  // too few slices: repeated too
     uint pixelIndex = pixel.y * pc.width + pixel.x;
-    Vec4ArrayRef block = Vec4ArrayRef(uvec2(pc.blockLo, pc.blockHi));
+    AccumRef block = AccumRef(uvec2(pc.blockLo, pc.blockHi));
     uint bi = pixelIndex * kGatherBlockVec4s;
     bool lastSlice = pc.slice + 1u == pc.sliceCount;
 
     // ---- Camera ray and the level of this pass ----
     Rng rng = rngCreate(pixelIndex, pc.pass, passSeed(pc.seed, pc.passInBlock));
-    vec2 jitter = vec2(rngNext(rng), rngNext(rng));
-    if (kFilter == kFilterTent) jitter = vec2(sampleTent(jitter.x), sampleTent(jitter.y)) + 0.5;
-    else if (kFilter == kFilterDirac) jitter = vec2(0.5);
-    float w = float(pc.width);
-    vec3 local = vec3(-1.0 + 2.0 * (float(pixel.x) + jitter.x) / w,
-                      float(pc.height) / w - 2.0 * (float(pixel.y) + jitter.y) / w, pc.planeDistance);
-    vec3 dir = normalize(pc.cameraRight * local.x + pc.cameraUp * local.y + pc.cameraForward * local.z);
+    float u1 = rngNext(rng), u2 = rngNext(rng);
+    float filterWeight;  // 1: photon mapping takes dirac, box and tent only (the loader says so)
+    vec2 film = cameraFilmPoint(kFilter, pixel, vec2(u1, u2), filterWeight);
+    vec3 dir = cameraRayDirection(film, pc.width, pc.height, pc.planeDistance, pc.cameraRight, pc.cameraUp,
+                                  pc.cameraForward);
     vec3 origin = pc.cameraPosition;
 
     const bool unbiased = kEstimator == kPhotonUnbiased;
@@ -107,7 +77,7 @@ void main() {
     float uLevel1 = rngNext(rng), uLevel2 = rngNext(rng);
     uint level = pc.level;
     uint done = pc.passInBlock;
-    if (unbiased && kSchedule == kPhotonSchedulePerPixel) {
+    if (unbiased && kSchedule == kLevelSchedulePerPixel) {
         float state = block.v[bi + kBlockBaseHi].w;
         done = state == 0.0 ? 0u : uint(block.v[bi + kBlockBaseLo].w);
         level = state == 0.0 ? photonLevelSample(levels, uLevel1, uLevel2) : uint(state) - 1u;
@@ -121,12 +91,8 @@ void main() {
         Hit hit;
         if (!traceClosest(origin, dir, kInfinity, hit)) break;
         Prim pr = prims[hit.prim];
-        vec3 p = origin + dir * hit.t;
-        vec3 ng = pr.n;
-        if (kHasSpheres && pr.type == kPrimSphere) {
-            ng = normalize(p - pr.p0);
-            p = pr.p0 + ng * pr.p1.x;
-        }
+        vec3 p, ng;
+        hitPoint(pr, origin, dir, hit.t, p, ng);
         light += throughput * primEmission(pr, dir, ng);
         if (v > kPhotonMaxBounces) break;
         MaterialGpu m = materials[pr.material];
@@ -174,8 +140,8 @@ void main() {
             block.v[bi + kBlockCorrHi] = vec4(0.0);
             block.v[bi + kBlockCorrLo] = vec4(0.0);
         }
-        addCompensated(block, bi + kBlockBaseHi, base);
-        addCompensated(block, bi + kBlockCorrHi, passCorrection);
+        addCompensated(block, bi + kBlockBaseHi, vec4(base, 0.0));  // w (block state) unchanged
+        addCompensated(block, bi + kBlockCorrHi, vec4(passCorrection, 0.0));
         uint passes = photonBlockPasses(levels, level);
         if (done + 1u < passes) {
             block.v[bi + kBlockBaseHi].w = float(level + 1u);
@@ -187,22 +153,12 @@ void main() {
         base = (block.v[bi + kBlockBaseHi].xyz + block.v[bi + kBlockBaseLo].xyz) * inv;
         correction = (block.v[bi + kBlockCorrHi].xyz + block.v[bi + kBlockCorrLo].xyz) * inv;
         block.v[bi + kBlockBaseHi].w = 0.0;
-        if (kSchedule == kPhotonSchedulePerPixel) count = 1.0;
+        if (kSchedule == kLevelSchedulePerPixel) count = 1.0;
     }
 
     // ---- Accumulate: estimate, square, base, correction and its signed parts ----
-    vec3 z = base + correction;
-    float dropped = 0.0;
-    if (any(isnan(z)) || any(isinf(z))) {
-        dropped = 1.0;
-        z = base = correction = vec3(0.0);
-    }
-    AccumRef accum = AccumRef(uvec2(pc.accumLo, pc.accumHi));
-    uint pixelCount = pc.width * pc.height;
-    accumulateAdd(accum, kChannelEstimate, pixelIndex, pixelCount, vec4(z, dropped));
-    accumulateAdd(accum, kChannelEstimateSq, pixelIndex, pixelCount, vec4(z * z, count));
-    accumulateAdd(accum, kChannelBase, pixelIndex, pixelCount, vec4(base, 0.0));
-    accumulateAdd(accum, kChannelCorrection, pixelIndex, pixelCount, vec4(correction, 0.0));
-    accumulateAdd(accum, kChannelCorrectionPositive, pixelIndex, pixelCount, vec4(max(correction, vec3(0.0)), 0.0));
-    accumulateAdd(accum, kChannelCorrectionNegative, pixelIndex, pixelCount, vec4(min(correction, vec3(0.0)), 0.0));
+    SampleSums sums = sampleSumsZero();
+    sampleSumsAdd(sums, base, correction);
+    sums.count = count;
+    accumulateSums(AccumRef(uvec2(pc.accumLo, pc.accumHi)), pixelIndex, pc.width * pc.height, sums);
 }

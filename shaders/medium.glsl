@@ -27,24 +27,15 @@ layout(std430, binding = kBindingGridData) readonly buffer GridBuffer { float gr
 layout(std430, binding = kBindingPrimMedia) readonly buffer PrimMediaBuffer { uint primMedia[]; };
 
 // ---- Density ----
+#include "shared/density_grid.h"
 
-// Trilinear lookup of a grid medium at world point p (voxel centres, clamped at the faces).
+// Trilinear lookup of a grid medium at world point p (shared/density_grid.h).
 float gridDensityAt(uint mi, vec3 p) {
-    vec3 lo = media[mi].gridMin, hi = media[mi].gridMax;
-    uvec3 res = media[mi].gridRes;
-    vec3 unit = (p - lo) / (hi - lo);
-    if (any(lessThan(unit, vec3(0.0))) || any(greaterThan(unit, vec3(1.0)))) return 0.0;
-    vec3 c = clamp(unit * vec3(res) - 0.5, vec3(0.0), vec3(res) - 1.0);
-    uvec3 i0 = uvec3(floor(c));
-    uvec3 i1 = min(i0 + 1u, res - 1u);
-    vec3 t = c - vec3(i0);
-    uint base = media[mi].gridOffset;
-    uint rx = res.x, rxy = res.x * res.y;
-    float v00 = mix(gridData[base + i0.z * rxy + i0.y * rx + i0.x], gridData[base + i0.z * rxy + i0.y * rx + i1.x], t.x);
-    float v10 = mix(gridData[base + i0.z * rxy + i1.y * rx + i0.x], gridData[base + i0.z * rxy + i1.y * rx + i1.x], t.x);
-    float v01 = mix(gridData[base + i1.z * rxy + i0.y * rx + i0.x], gridData[base + i1.z * rxy + i0.y * rx + i1.x], t.x);
-    float v11 = mix(gridData[base + i1.z * rxy + i1.y * rx + i0.x], gridData[base + i1.z * rxy + i1.y * rx + i1.x], t.x);
-    return mix(mix(v00, v10, t.y), mix(v01, v11, t.y), t.z);
+    GridStencil g;
+    if (!gridStencil(media[mi].gridRes, (p - media[mi].gridMin) / (media[mi].gridMax - media[mi].gridMin), g)) return 0.0;
+    uint i = media[mi].gridOffset + g.corner, x = g.step.x, y = g.step.y, z = g.step.z;
+    return gridTrilinear(g.t, gridData[i], gridData[i + x], gridData[i + y], gridData[i + x + y], gridData[i + z],
+                         gridData[i + x + z], gridData[i + y + z], gridData[i + x + y + z]);
 }
 
 #define TR_GRID_DENSITY(s, t) gridDensityAt((s).medium, (s).origin + (s).dir * (t))

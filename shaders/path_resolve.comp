@@ -21,29 +21,12 @@ void main() {
     uint pixelCount = pc.width * pc.height;
     LevelResultsRef results = levelResults();
 
-    vec3 sumZ = vec3(0.0), sumZ2 = vec3(0.0), sumBase = vec3(0.0), sumCorrection = vec3(0.0);
-    vec3 sumCorrectionPos = vec3(0.0), sumCorrectionNeg = vec3(0.0);
-    float dropped = 0.0;
+    SampleSums sums = sampleSumsZero();
     for (uint s = 0u; s < pc.sampleCount; ++s) {
         uint item = s * pixelCount + pixelIndex;
         vec4 base = results.v[2u * item], correction = results.v[2u * item + 1u];
-        if (base.w != 0.0) {
-            dropped += 1.0;
-            continue;
-        }
-        vec3 z = base.rgb + correction.rgb;
-        sumZ += z;
-        sumZ2 += z * z;
-        sumBase += base.rgb;
-        sumCorrection += correction.rgb;
-        sumCorrectionPos += max(correction.rgb, vec3(0.0));
-        sumCorrectionNeg += min(correction.rgb, vec3(0.0));
+        if (base.w != 0.0) sums.dropped += 1.0;  // non-finite (path_trace's queued lanes)
+        else sampleSumsAdd(sums, base.rgb, correction.rgb);
     }
-    AccumRef accum = AccumRef(uvec2(pc.accumAddressLo, pc.accumAddressHi));
-    accumulateAdd(accum, kChannelEstimate, pixelIndex, pixelCount, vec4(sumZ, dropped));
-    accumulateAdd(accum, kChannelEstimateSq, pixelIndex, pixelCount, vec4(sumZ2, 0.0));
-    accumulateAdd(accum, kChannelBase, pixelIndex, pixelCount, vec4(sumBase, 0.0));
-    accumulateAdd(accum, kChannelCorrection, pixelIndex, pixelCount, vec4(sumCorrection, 0.0));
-    accumulateAdd(accum, kChannelCorrectionPositive, pixelIndex, pixelCount, vec4(sumCorrectionPos, 0.0));
-    accumulateAdd(accum, kChannelCorrectionNegative, pixelIndex, pixelCount, vec4(sumCorrectionNeg, 0.0));
+    accumulateSums(AccumRef(uvec2(pc.accumAddressLo, pc.accumAddressHi)), pixelIndex, pixelCount, sums);
 }

@@ -8,7 +8,7 @@
 #include "shared/rng.h"
 #include "shared/sampling.h"
 #include "shared/path_depth.h"
-#include "shared/pixel_filter.h"
+#include "shared/camera.h"
 #include "accumulate.glsl"
 
 layout(local_size_x = kPathTraceGroupSize, local_size_y = kPathTraceGroupSize) in;
@@ -63,22 +63,13 @@ Prim scenePrim(uint i) {
 // shared/pixel_filter.h); it multiplies the sample's base and correction when the path ends.
 float gFilterWeight = 1.0;
 
-// Camera ray of sample s (Tungsten's pinhole: pixel (0,0) top-left, fov horizontal) and the
-// level drawn for it.
+// Camera ray of sample s (shared/camera.h) and the level drawn for it.
 PathState startSample(uvec2 pixel, uint pixelIndex, uint s, LevelPmf pmf, out Rng rng) {
     rng = rngCreate(pixelIndex, pc.sampleBase + s, pc.seed);
-    vec2 jitter = vec2(rngNext(rng), rngNext(rng));
-    if (kFilter == kFilterTent) jitter = vec2(sampleTent(jitter.x), sampleTent(jitter.y)) + 0.5;
-    else if (kFilter == kFilterDirac) jitter = vec2(0.5);
-    else if (isWideFilter(kFilter)) {
-        float wx, wy;
-        jitter = vec2(sampleWideFilter(kFilter, jitter.x, wx), sampleWideFilter(kFilter, jitter.y, wy)) + 0.5;
-        gFilterWeight = wx * wy;
-    }
-    float w = float(pc.width);
-    vec3 local = vec3(-1.0 + 2.0 * (float(pixel.x) + jitter.x) / w,
-                      float(pc.height) / w - 2.0 * (float(pixel.y) + jitter.y) / w, pc.planeDistance);
-    vec3 dir = normalize(pc.cameraRight * local.x + pc.cameraUp * local.y + pc.cameraForward * local.z);
+    float u1 = rngNext(rng), u2 = rngNext(rng);
+    vec2 film = cameraFilmPoint(kFilter, pixel, vec2(u1, u2), gFilterWeight);
+    vec3 dir = cameraRayDirection(film, pc.width, pc.height, pc.planeDistance, pc.cameraRight, pc.cameraUp,
+                                  pc.cameraForward);
     uint level = 0u;
     if (kPilot) {
         level = pc.pilotLevel;
@@ -127,8 +118,7 @@ void queuedMain(LevelPmf pmf) {
     while (true) {
         if (pathStep(path, pmf, rng)) continue;
         if (isWideFilter(kFilter)) path.result = PathResult(path.result.base * gFilterWeight, path.result.correction * gFilterWeight);
-        vec3 z = path.result.base + path.result.correction;
-        float bad = (any(isnan(z)) || any(isinf(z))) ? 1.0 : 0.0;
+        float bad = isFiniteVec(path.result.base + path.result.correction) ? 0.0 : 1.0;
         results.v[2u * item] = vec4(path.result.base, bad);
         results.v[2u * item + 1u] = vec4(path.result.correction, 0.0);
         if (!fetchItem(q, total, slot, item)) break;
@@ -146,11 +136,8 @@ void main() {
     uint pixelIndex = pixel.y * pc.width + pixel.x;
     uint pixelCount = pc.width * pc.height;
     LevelPmf pmf = LevelPmf(kPmfType, kPmfR, kPmfAlpha);
-
-    vec3 sumZ = vec3(0.0), sumZ2 = vec3(0.0), sumBase = vec3(0.0), sumCorrection = vec3(0.0);
-    vec3 sumCorrectionPos = vec3(0.0), sumCorrectionNeg = vec3(0.0);
-    float dropped = 0.0;
     if (pc.sampleCount == 0u) return;
+    SampleSums sums = sampleSumsZero();
 
     uint s = 0u;
     Rng rng;
@@ -161,35 +148,23 @@ void main() {
         if (pathStep(path, pmf, rng)) continue;
         // ---- Path finished: accumulate, then start the next sample in the same lane ----
         if (isWideFilter(kFilter)) path.result = PathResult(path.result.base * gFilterWeight, path.result.correction * gFilterWeight);
-        vec3 z = kPilot ? path.result.correction : path.result.base + path.result.correction;
-        if (any(isnan(z)) || any(isinf(z)) || any(isnan(path.result.base)) || any(isinf(path.result.base))) {
-            dropped += 1.0;
-        } else if (kPilot) {
-            // pmf pilot, channels: estimate D_j, estimate^2, base = (rays traced, 0, 0),
-            // correction+ = I(k), correction- = I(k)^2 (accumulate.glsl has no other use for them here).
-            sumZ += z;
-            sumZ2 += z * z;
-            sumBase += vec3(rays, 0.0, 0.0);
-            sumCorrectionPos += path.result.base;
-            sumCorrectionNeg += path.result.base * path.result.base;
+        if (!kPilot) {
+            sampleSumsAdd(sums, path.result.base, path.result.correction);
+        } else if (!isFiniteVec(path.result.correction) || !isFiniteVec(path.result.base)) {
+            sums.dropped += 1.0;
         } else {
-            sumZ += z;
-            sumZ2 += z * z;
-            sumBase += path.result.base;
-            sumCorrection += path.result.correction;
-            sumCorrectionPos += max(path.result.correction, vec3(0.0));
-            sumCorrectionNeg += min(path.result.correction, vec3(0.0));
+            // pmf pilot, channels: estimate D_j, estimate^2, base = (rays traced, 0, 0),
+            // correction+ = I(k), correction- = I(k)^2 (the film has no other use for them here).
+            vec3 d = path.result.correction;
+            sums.z += d;
+            sums.z2 += d * d;
+            sums.base += vec3(rays, 0.0, 0.0);
+            sums.correctionPos += path.result.base;
+            sums.correctionNeg += path.result.base * path.result.base;
         }
         rays = 0.0;
         if (++s == pc.sampleCount) break;
         path = startSample(pixel, pixelIndex, s, pmf, rng);
     }
-
-    AccumRef accum = AccumRef(uvec2(pc.accumAddressLo, pc.accumAddressHi));
-    accumulateAdd(accum, kChannelEstimate, pixelIndex, pixelCount, vec4(sumZ, dropped));
-    accumulateAdd(accum, kChannelEstimateSq, pixelIndex, pixelCount, vec4(sumZ2, 0.0));
-    accumulateAdd(accum, kChannelBase, pixelIndex, pixelCount, vec4(sumBase, 0.0));
-    accumulateAdd(accum, kChannelCorrection, pixelIndex, pixelCount, vec4(sumCorrection, 0.0));
-    accumulateAdd(accum, kChannelCorrectionPositive, pixelIndex, pixelCount, vec4(sumCorrectionPos, 0.0));
-    accumulateAdd(accum, kChannelCorrectionNegative, pixelIndex, pixelCount, vec4(sumCorrectionNeg, 0.0));
+    accumulateSums(AccumRef(uvec2(pc.accumAddressLo, pc.accumAddressHi)), pixelIndex, pixelCount, sums);
 }

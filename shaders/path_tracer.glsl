@@ -30,62 +30,6 @@ void addContribution(inout PathResult r, uint bounce, vec3 c, LevelPmf pmf, uint
 
 #include "scene_common.glsl"
 
-// ---- Lights ----
-// Solid-angle density with which next-event estimation picks a point on an emissive prim.
-float areaLightPdf(uint lightIndex, float area, float dist, float cosLight) {
-    return lights[lightIndex].pmf * dist * dist / max(cosLight * area, 1e-30);
-}
-
-// One light picked by power and a direction towards it from p: the shadow-ray length, the
-// incident radiance divided by the solid-angle pdf, and that pdf (0 for point lights: no MIS).
-struct LightSample {
-    vec3 wi;
-    float dist;
-    vec3 weight;
-    float pdf;
-};
-
-bool sampleLight(vec3 p, inout Rng rng, out LightSample ls) {
-    uint li = pickLight(rngNext(rng));
-    LightGpu light = lights[li];
-    float u1 = rngNext(rng), u2 = rngNext(rng);
-    ls.pdf = 0.0;
-    if (light.type == kLightPoint) {
-        vec3 d = light.position - p;
-        ls.dist = length(d);
-        ls.wi = d / ls.dist;
-        ls.weight = light.radiance / (ls.dist * ls.dist * light.pmf);
-    } else if (light.type == kLightEnvironment) {
-        ls.wi = sampleUniformSphere(u1, u2);
-        ls.dist = kInfinity;
-        ls.pdf = light.pmf / (4.0 * kPi);
-        ls.weight = light.radiance / ls.pdf;
-    } else {
-        // Area light: a uniform point on the emissive prim.
-        Prim pr = BVH_PRIM(light.prim);
-        vec3 q, nq;
-        if (kHasSpheres && pr.type == kPrimSphere) {
-            nq = sampleUniformSphere(u1, u2);
-            q = pr.p0 + nq * pr.p1.x;
-        } else if (kHasDisks && pr.type == kPrimDisk) {
-            q = sampleDisk(pr.p0, pr.n, pr.p1.x, u1, u2);
-            nq = pr.n;
-        } else {
-            q = sampleTriangle(pr.p0, pr.p1, pr.p2, u1, u2);
-            nq = pr.n;
-        }
-        vec3 d = q - p;
-        ls.dist = length(d);
-        ls.wi = d / max(ls.dist, 1e-30);
-        float cosL = -dot(ls.wi, nq);
-        if (cosL <= 0.0 || !(ls.dist > 0.0)) return false;
-        ls.pdf = areaLightPdf(li, pr.area, ls.dist, cosL);
-        ls.weight = light.radiance / ls.pdf;
-        ls.dist *= 1.0 - 1e-4;  // stop short of the light itself
-    }
-    return true;
-}
-
 // Next-event estimation from a Lambertian point p with normal n (facing the viewer):
 // one light picked by power, one shadow ray, MIS against cosine sampling. With media the shadow
 // ray starts in `medium` (index + 1) and `crossings` counts the forward surfaces it passed.
@@ -211,12 +155,8 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         return false;
     }
     Prim pr = BVH_PRIM(hit.prim);
-    vec3 p = s.origin + s.dir * hit.t;
-    vec3 ng = pr.n;
-    if (kHasSpheres && pr.type == kPrimSphere) {
-        ng = normalize(p - pr.p0);
-        p = pr.p0 + ng * pr.p1.x;
-    }
+    vec3 p, ng;
+    hitPoint(pr, s.origin, s.dir, hit.t, p, ng);
 
     // Emission reached by the last BSDF sample (or seen by the camera).
     vec3 le = primEmission(pr, s.dir, ng);
@@ -257,24 +197,8 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         s.pdfPrev = cosO * kInvPi;
         s.throughput *= m.albedo;
         s.specularPrev = false;
-    } else if (kHasSpecular && m.type == kBsdfMirror) {
-        s.dir = reflect(s.dir, n);
-        s.throughput *= m.albedo;
-        s.specularPrev = true;
-    } else if (kHasSpecular && m.type == kBsdfDielectric) {
-        // Smooth dielectric: reflect with probability F, else refract.
-        float eta = front ? m.ior : 1.0 / m.ior;  // n_transmitted / n_incident
-        float cosI = -dot(s.dir, n);
-        float cosT;
-        float F = fresnelDielectric(cosI, eta, cosT);
-        bool refract = (m.flags & kMaterialRefraction) != 0u;
-        if (!refract || rngNext(rng) < F) {
-            s.dir = reflect(s.dir, n);
-            if (!refract) s.throughput *= F;
-        } else {
-            s.dir = normalize(s.dir / eta + n * (cosI / eta - cosT));
-        }
-        s.throughput *= m.albedo;
+    } else if (kHasSpecular && (m.type == kBsdfMirror || m.type == kBsdfDielectric)) {
+        s.throughput *= scatterSpecular(m, front, n, s.dir, rng);
         s.specularPrev = true;
     } else {
         return false;  // null: black and opaque

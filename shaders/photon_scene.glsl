@@ -27,37 +27,3 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer PhotonArray
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer UintArrayRef { uint v[]; };
 
 #include "scene_common.glsl"
-
-// A uniform point on an emissive prim and its emitting normal.
-void sampleLightPoint(Prim pr, float u1, float u2, out vec3 q, out vec3 nq) {
-    if (kHasSpheres && pr.type == kPrimSphere) {
-        nq = sampleUniformSphere(u1, u2);
-        q = pr.p0 + nq * pr.p1.x;
-    } else if (kHasDisks && pr.type == kPrimDisk) {
-        q = sampleDisk(pr.p0, pr.n, pr.p1.x, u1, u2);
-        nq = pr.n;
-    } else {
-        q = sampleTriangle(pr.p0, pr.p1, pr.p2, u1, u2);
-        nq = pr.n;
-    }
-}
-
-// Mirror or smooth dielectric (reflect with probability F, else refract), as path_trace does;
-// returns the throughput factor. n faces the incoming ray.
-vec3 scatterSpecular(MaterialGpu m, bool front, vec3 n, inout vec3 dir, inout Rng rng) {
-    if (m.type == kBsdfMirror) {
-        dir = reflect(dir, n);
-        return m.albedo;
-    }
-    float eta = front ? m.ior : 1.0 / m.ior;  // n_transmitted / n_incident
-    float cosI = -dot(dir, n);
-    float cosT;
-    float F = fresnelDielectric(cosI, eta, cosT);
-    bool refract = (m.flags & kMaterialRefraction) != 0u;
-    if (!refract || rngNext(rng) < F) {
-        dir = reflect(dir, n);
-        return refract ? m.albedo : m.albedo * F;
-    }
-    dir = normalize(dir / eta + n * (cosI / eta - cosT));
-    return m.albedo;
-}

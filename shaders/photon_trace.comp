@@ -31,7 +31,7 @@ void emitPhoton(inout Rng rng, out vec3 origin, out vec3 dir, out vec3 power) {
     // Area light of radiance L: flux pi A L, uniform points, cosine-distributed directions.
     Prim pr = prims[light.prim];
     vec3 q, nq;
-    sampleLightPoint(pr, u1, u2, q, nq);
+    sampleEmitterPoint(pr, kHasSpheres, kHasDisks, u1, u2, q, nq);
     dir = sampleCosineHemisphere(nq, u3, u4);
     origin = offsetRayOrigin(q, nq, dir);
     power = light.radiance * (kPi * pr.area / light.pmf) * pc.pathScale;
@@ -58,12 +58,8 @@ void main() {
         Hit hit;
         if (!traceClosest(origin, dir, kInfinity, hit)) return;
         Prim pr = prims[hit.prim];
-        vec3 p = origin + dir * hit.t;
-        vec3 ng = pr.n;
-        if (kHasSpheres && pr.type == kPrimSphere) {
-            ng = normalize(p - pr.p0);
-            p = pr.p0 + ng * pr.p1.x;
-        }
+        vec3 p, ng;
+        hitPoint(pr, origin, dir, hit.t, p, ng);
         MaterialGpu m = materials[pr.material];
         bool front = dot(dir, ng) < 0.0;
         vec3 n = front ? ng : -ng;  // faces the incoming photon

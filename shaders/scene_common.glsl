@@ -1,5 +1,8 @@
 // Scene helpers shared by the path tracer and the photon passes (GLSL only; included after the
-// scene buffers and the specialisation constants kRayEpsilon and kLightCount).
+// scene buffers, intersect.h and the specialisation constants kRayEpsilon, kLightCount,
+// kHasSpheres and kHasDisks). The CPU-tested parts live in shared/ (bsdf.h, emitter.h).
+#include "shared/bsdf.h"
+#include "shared/emitter.h"
 
 // Offset along the geometric normal, to the side the next ray leaves from.
 vec3 offsetRayOrigin(vec3 p, vec3 ng, vec3 dir) {
@@ -23,4 +26,51 @@ uint pickLight(float u) {
 vec3 primEmission(Prim pr, vec3 dir, vec3 ng) {
     if (pr.light < 0 || dot(dir, ng) >= 0.0) return vec3(0.0);
     return lights[uint(pr.light)].radiance;
+}
+
+// ---- Lights ----
+// Solid-angle density with which next-event estimation picks a point on an emissive prim.
+float areaLightPdf(uint lightIndex, float area, float dist, float cosLight) {
+    return lights[lightIndex].pmf * dist * dist / max(cosLight * area, 1e-30);
+}
+
+// One light picked by power and a direction towards it from p: the shadow-ray length, the
+// incident radiance divided by the solid-angle pdf, and that pdf (0 for point lights: no MIS).
+struct LightSample {
+    vec3 wi;
+    float dist;
+    vec3 weight;
+    float pdf;
+};
+
+bool sampleLight(vec3 p, inout Rng rng, out LightSample ls) {
+    uint li = pickLight(rngNext(rng));
+    LightGpu light = lights[li];
+    float u1 = rngNext(rng), u2 = rngNext(rng);
+    ls.pdf = 0.0;
+    if (light.type == kLightPoint) {
+        vec3 d = light.position - p;
+        ls.dist = length(d);
+        ls.wi = d / ls.dist;
+        ls.weight = light.radiance / (ls.dist * ls.dist * light.pmf);
+    } else if (light.type == kLightEnvironment) {
+        ls.wi = sampleUniformSphere(u1, u2);
+        ls.dist = kInfinity;
+        ls.pdf = light.pmf / (4.0 * kPi);
+        ls.weight = light.radiance / ls.pdf;
+    } else {
+        // Area light: a uniform point on the emissive prim.
+        Prim pr = BVH_PRIM(light.prim);
+        vec3 q, nq;
+        sampleEmitterPoint(pr, kHasSpheres, kHasDisks, u1, u2, q, nq);
+        vec3 d = q - p;
+        ls.dist = length(d);
+        ls.wi = d / max(ls.dist, 1e-30);
+        float cosL = -dot(ls.wi, nq);
+        if (cosL <= 0.0 || !(ls.dist > 0.0)) return false;
+        ls.pdf = areaLightPdf(li, pr.area, ls.dist, cosL);
+        ls.weight = light.radiance / ls.pdf;
+        ls.dist *= 1.0 - 1e-4;  // stop short of the light itself
+    }
+    return true;
 }

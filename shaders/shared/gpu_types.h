@@ -4,16 +4,12 @@
 #ifndef TELESCOPE_GPU_TYPES_H
 #define TELESCOPE_GPU_TYPES_H
 
-#include "shared/lang.h"
+#include "shared/enums.h"
 #include "shared/transmittance.h"
 
 SHADER_NAMESPACE_BEGIN
 
-// ---- Geometry (GeometryType in src/scene/scene.h) ----
-CONST uint kPrimTriangle = 0u;
-CONST uint kPrimSphere = 1u;
-CONST uint kPrimDisk = 2u;
-
+// ---- Geometry (type: kPrim*, shared/enums.h) ----
 // A ray-traceable primitive. Triangle: p0, p1, p2. Sphere: centre p0, radius p1.x.
 // Disk: centre p0, radius p1.x, unit normal n. n is the geometric (emitting) normal.
 struct Prim {
@@ -29,24 +25,14 @@ struct BvhNode {
     vec3 hi; uint count;
 };
 
-// ---- Materials ----
-CONST uint kBsdfLambert = 0u;
-CONST uint kBsdfMirror = 1u;
-CONST uint kBsdfDielectric = 2u;
-CONST uint kBsdfNull = 3u;
-CONST uint kBsdfForward = 4u;  // invisible medium boundary (Tungsten's "forward")
-
+// ---- Materials (type: kBsdf*) ----
 struct MaterialGpu {
     vec3 albedo; uint type;
     float ior; uint flags; float pad0; float pad1;
 };
 CONST uint kMaterialRefraction = 1u;  // flags: dielectric transmits
 
-// ---- Lights ----
-CONST uint kLightArea = 0u;    // an emissive Prim
-CONST uint kLightPoint = 1u;
-CONST uint kLightEnvironment = 2u;
-
+// ---- Lights (type: kLight*) ----
 // Radiance: area light (per unit area, one-sided for triangles/disks, outward for spheres),
 // intensity for a point light, radiance for the environment.
 struct LightGpu {
@@ -55,13 +41,7 @@ struct LightGpu {
     float pmf; float cdf; float pad0; float pad1;  // light selection probability, inclusive cdf
 };
 
-// ---- Participating media ----
-CONST uint kMediumHomogeneous = 0u;
-CONST uint kMediumExponential = 1u;  // density exp(-falloffScale dot(x - unitPoint, falloffDir))
-CONST uint kMediumGrid = 2u;         // voxel grid over the box [gridMin, gridMax], trilinear
-CONST uint kPhaseIsotropic = 0u;
-CONST uint kPhaseHenyeyGreenstein = 1u;
-
+// ---- Participating media (type: kMedium*, phase: kPhase*) ----
 struct MediumGpu {
     vec3 sigmaT; uint type;           // sigma_a + sigma_s, per unit density
     vec3 sigmaS; float density;
@@ -147,15 +127,6 @@ CONST uint kSpecCameraMedium = 38u;      // medium index + 1, 0 = vacuum
 CONST uint kSpecHasGrids = 39u;
 CONST uint kSpecTrModel = 40u;           // the transmittance model every medium shares, or 0xffffffff
 
-// Reconstruction filters (camera.reconstruction_filter; shared/pixel_filter.h has the wide ones).
-CONST uint kFilterBox = 0u;
-CONST uint kFilterTent = 1u;
-CONST uint kFilterDirac = 2u;
-CONST uint kFilterGaussian = 3u;
-CONST uint kFilterMitchellNetravali = 4u;
-CONST uint kFilterCatmullRom = 5u;
-CONST uint kFilterLanczos = 6u;
-
 CONST uint kPathTraceGroupSize = 8u;  // 8x8 pixel tiles
 
 struct PathTracePush {
@@ -182,9 +153,6 @@ struct PathTracePush {
 //            lane per chunk: no atomics, so the queue and the image are repeatable), lane i of
 //            path_trace takes queue slots i, i + lanes, ... (neighbouring lanes hold the same
 //            level), and path_resolve accumulates the per-item results in sample order.
-CONST uint kLevelSchedulePerPixel = 0u;
-CONST uint kLevelScheduleUniform = 1u;
-CONST uint kLevelScheduleQueued = 2u;
 CONST uint kLevelBuckets = 64u;          // levels >= 63 share the last bucket
 CONST uint kLevelChunk = 64u;            // items per lane in level_count / level_scatter
 CONST uint kLevelQueueGroupSize = 64u;
@@ -218,16 +186,12 @@ SHADER_NAMESPACE_BEGIN
 
 CONST uint kSpecPhotonEstimator = 48u;   // kPhotonBiased or kPhotonUnbiased
 CONST uint kSpecPhotonKernel = 49u;      // kKernelCone, kKernelUniform, kKernelEpanechnikov
-CONST uint kSpecPhotonSchedule = 50u;    // kPhotonSchedule*: how the levels of the blocks are drawn
+CONST uint kSpecPhotonSchedule = 50u;    // kLevelSchedulePerPixel or kLevelScheduleUniform: how block levels are drawn
 CONST uint kSpecPhotonNextEvent = 53u;   // direct light by next-event estimation, not photons
 CONST uint kSpecGridStage = 54u;         // hash_grid_build: which stage this pipeline runs
 CONST uint kSpecPhotonMaxBounces = 55u;  // scattering vertices of a photon path / camera chain
 
-CONST uint kPhotonBiased = 0u;    // K_r at the pass radius (fixed radius, or the PPM schedule)
-CONST uint kPhotonUnbiased = 1u;  // blocks: mean K_{r_b} + mean (K_{r_{k+1}} - K_{r_k}) / p(k)
 
-CONST uint kPhotonScheduleUniform = 0u;   // the host draws one level per block for the whole image
-CONST uint kPhotonSchedulePerPixel = 1u;  // each pixel draws its own level and keeps its own block
 
 CONST uint kGridStageClear = 0u;    // cellCount = 0
 CONST uint kGridStageCount = 1u;    // photon -> cell hash, cellCount[h]++

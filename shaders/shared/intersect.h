@@ -171,9 +171,11 @@ TRACE_FN bool intersectPrim(Prim p, vec3 origin, vec3 dir, float tMin, float tMa
     return false;
 }
 
-// Closest hit with t in (0, tMax). Children are entered nearest first; the far child is pushed
-// with its entry distance and dropped on pop if a closer hit has been found meanwhile.
-TRACE_FN bool traceClosest(vec3 origin, vec3 dir, float tMax, OUT(Hit) hit) {
+// One traversal for both queries. Closest hit (anyHit false): t in (0, tMax), children entered
+// nearest first, the far child pushed with its entry distance and dropped on pop if a closer hit
+// has been found meanwhile. Any hit (anyHit true, shadow rays): stops at the first hit found.
+// Callers pass a constant anyHit, so each use compiles to one specialised loop.
+TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) hit) {
     hit.t = tMax;
     hit.prim = kNoPrim;
     hit.bary = vec2(0.0f);
@@ -196,6 +198,7 @@ TRACE_FN bool traceClosest(vec3 origin, vec3 dir, float tMax, OUT(Hit) hit) {
                     hit.t = t;
                     hit.prim = i;
                     hit.bary = bary;
+                    if (anyHit) return true;
                 }
             }
         } else {
@@ -234,50 +237,26 @@ TRACE_FN bool traceClosest(vec3 origin, vec3 dir, float tMax, OUT(Hit) hit) {
     return hit.prim != kNoPrim;
 }
 
-// Whether anything is hit with t in (0, tMax): shadow rays. Stops at the first hit found.
+TRACE_FN bool traceClosest(vec3 origin, vec3 dir, float tMax, OUT(Hit) hit) {
+    return traceRay(origin, dir, tMax, false, hit);
+}
+
+// Whether anything is hit with t in (0, tMax).
 TRACE_FN bool traceAny(vec3 origin, vec3 dir, float tMax) {
-    vec3 invDir = safeInverse(dir);
-    uint stack[kBvhStackSize];
-    uint sp = 0u;
-    float tEnter = 0.0f;
-    BvhNode node = BVH_NODE(0u);
-    if (!intersectBox(node.lo, node.hi, origin, invDir, 0.0f, tMax, tEnter)) return false;
-    while (true) {
-        BVH_COUNT_NODE_VISIT();
-        bool descend = false;
-        if (node.count > 0u) {
-            // Leaf: any primitive hit ends the query
-            for (uint i = node.first; i < node.first + node.count; ++i) {
-                float t = 0.0f;
-                vec2 bary = vec2(0.0f);
-                if (intersectPrim(BVH_PRIM(i), origin, dir, 0.0f, tMax, t, bary)) return true;
-            }
-        } else {
-            // Inner node: enter the nearer child, push the farther one
-            uint ia = node.first;
-            BvhNode a = BVH_NODE(ia);
-            BvhNode b = BVH_NODE(ia + 1u);
-            float ta = 0.0f;
-            float tb = 0.0f;
-            bool hitA = intersectBox(a.lo, a.hi, origin, invDir, 0.0f, tMax, ta);
-            bool hitB = intersectBox(b.lo, b.hi, origin, invDir, 0.0f, tMax, tb);
-            if (hitA && hitB) {
-                bool bFirst = tb < ta;
-                stack[sp] = bFirst ? ia : ia + 1u;
-                ++sp;
-                node = bFirst ? b : a;
-                descend = true;
-            } else if (hitA || hitB) {
-                node = hitA ? a : b;
-                descend = true;
-            }
-        }
-        if (descend) continue;
-        if (sp == 0u) break;
-        --sp;
-        node = BVH_NODE(stack[sp]);
+    Hit hit;
+    return traceRay(origin, dir, tMax, true, hit);
+}
+
+// The point where a ray hit prim at t and the prim's geometric normal there (for triangles and
+// disks the stored normal). Sphere points are projected back onto the sphere, so that the
+// rounding of origin + t dir does not leave them inside or outside.
+TRACE_FN void hitPoint(Prim pr, vec3 origin, vec3 dir, float t, OUT(vec3) p, OUT(vec3) ng) {
+    p = origin + dir * t;
+    ng = pr.n;
+    if (kHasSpheres && pr.type == kPrimSphere) {
+        ng = normalize(p - pr.p0);
+        p = pr.p0 + ng * pr.p1.x;
     }
-    return false;
 }
 
 SHADER_NAMESPACE_END

@@ -3,6 +3,7 @@
 // Shared headers write plain GLSL that C++ also accepts:
 //   FN          before every function (inline in C++),
 //   INOUT(T)    for inout parameters, OUT(T) for out parameters,
+//   PRECISE     GLSL's `precise` (no reassociation; C++ does not reassociate without -ffast-math),
 //   uint, vec3, ... are glm types in C++.
 // C++ sees the shared code inside namespace telescope::shader.
 #ifndef TELESCOPE_LANG_H
@@ -17,6 +18,7 @@
 #define INOUT(T) T&
 #define OUT(T) T&
 #define CONST constexpr
+#define PRECISE
 #define SHADER_NAMESPACE_BEGIN namespace telescope { namespace shader { using namespace glm; using uint = uint32_t;
 #define SHADER_NAMESPACE_END } }
 #else
@@ -24,6 +26,7 @@
 #define INOUT(T) inout T
 #define OUT(T) out T
 #define CONST const
+#define PRECISE precise
 #define SHADER_NAMESPACE_BEGIN
 #define SHADER_NAMESPACE_END
 #endif

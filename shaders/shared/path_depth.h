@@ -12,10 +12,6 @@
 
 SHADER_NAMESPACE_BEGIN
 
-CONST uint kDebiasNone = 0u;
-CONST uint kDebiasSingleTerm = 1u;
-CONST uint kDebiasSum = 2u;
-
 // Deepest bounce whose contribution has a non-zero weight.
 FN uint depthLimit(uint mode, uint k, uint level) {
     if (mode == kDebiasNone) return k;

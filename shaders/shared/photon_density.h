@@ -18,21 +18,7 @@
 
 SHADER_NAMESPACE_BEGIN
 
-CONST uint kKernelCone = 0u;
-CONST uint kKernelUniform = 1u;
-CONST uint kKernelEpanechnikov = 2u;
-
 CONST float kLn2 = 0.69314718056f;
-
-// ---- Accurate log(1 + x) and exp(x) - 1 (series below 1e-2, relative error < 1e-6 above) ----
-FN float log1pPrecise(float x) {
-    if (abs(x) < 1e-2f) return x * (1.0f - x * (0.5f - x * (1.0f / 3.0f - x * (0.25f - x * 0.2f))));
-    return log(1.0f + x);
-}
-FN float expm1Precise(float x) {
-    if (abs(x) < 1e-2f) return x * (1.0f + x * (0.5f + x * (1.0f / 6.0f + x * (1.0f / 24.0f + x * (1.0f / 120.0f)))));
-    return exp(x) - 1.0f;
-}
 
 // ---- Kernels ----
 FN float kernelShape(uint kernel, float t) {
@@ -56,10 +42,10 @@ FN float kernelDifference(uint kernel, float d2, float r2, float logQ2) {
     float t2 = d2 / r2;
     float t = sqrt(t2);
     if (!(t2 < exp(logQ2))) return -kernelShape(kernel, t) / (kPi * r2);
-    float e2 = expm1Precise(-logQ2);
+    float e2 = expm1Safe(-logQ2);
     if (kernel == kKernelUniform) return e2 / (kPi * r2);
-    if (kernel == kKernelEpanechnikov) return 2.0f * (e2 - t2 * expm1Precise(-2.0f * logQ2)) / (kPi * r2);
-    return 3.0f * (e2 - t * expm1Precise(-1.5f * logQ2)) / (kPi * r2);
+    if (kernel == kKernelEpanechnikov) return 2.0f * (e2 - t2 * expm1Safe(-2.0f * logQ2)) / (kPi * r2);
+    return 3.0f * (e2 - t * expm1Safe(-1.5f * logQ2)) / (kPi * r2);
 }
 
 // ---- Block levels (docs/PHOTON-MAPPING.md) ----
@@ -75,21 +61,14 @@ struct PhotonLevels {
     uint cap;            // K: levels 0 .. K-1
 };
 
-// p(k).
-FN float photonLevelProbability(PhotonLevels l, uint k) {
-    float lq = log1pPrecise(-l.r);
-    return l.r * exp(float(k) * lq) / -expm1Precise(float(l.cap) * lq);
-}
+// The geometric pmf of the levels (truncated to k < K by the functions below).
+FN LevelPmf photonLevelPmf(PhotonLevels l) { return makeLevelPmf(kPmfGeometric, l.r, 0.0f); }
 
-// Inverts the tail P(level >= k) = (q^k - q^K) / (1 - q^K) from 48 random bits (u1, u2 uniform
-// in [0, 1) with 24 bits each): with one float's 24 bits no level beyond ~13 could be drawn.
-FN uint photonLevelSample(PhotonLevels l, float u1, float u2) {
-    float v = (1.0f - u1) - u2 * (1.0f / 16777216.0f);  // uniform in (0, 1]
-    float lq = log1pPrecise(-l.r);
-    float qK = exp(float(l.cap) * lq);
-    float k = floor(log(v * (1.0f - qK) + qK) / lq);
-    return uint(clamp(k, 0.0f, float(l.cap - 1u)));
-}
+// p(k).
+FN float photonLevelProbability(PhotonLevels l, uint k) { return levelProbabilityBelow(photonLevelPmf(l), k, l.cap); }
+
+// A level from 48 random bits (shared/level_pmf.h levelSampleBelow).
+FN uint photonLevelSample(PhotonLevels l, float u1, float u2) { return levelSampleBelow(photonLevelPmf(l), l.cap, u1, u2); }
 
 // m^k passes (the settings keep m^(K-1) below 2^31).
 FN uint photonBlockPasses(PhotonLevels l, uint k) {

@@ -10,7 +10,7 @@
 #ifndef TELESCOPE_PIXEL_FILTER_H
 #define TELESCOPE_PIXEL_FILTER_H
 
-#include "shared/gpu_types.h"
+#include "shared/enums.h"
 #include "shared/sampling.h"
 
 SHADER_NAMESPACE_BEGIN

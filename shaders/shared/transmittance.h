@@ -15,21 +15,11 @@
 #ifndef TELESCOPE_TRANSMITTANCE_H
 #define TELESCOPE_TRANSMITTANCE_H
 
-#include "shared/lang.h"
+#include "shared/enums.h"
 
 SHADER_NAMESPACE_BEGIN
 
-// ---- Model types (Tungsten's "transmittance" type names) ----
-CONST uint kTrExponential = 0u;
-CONST uint kTrLinear = 1u;            // max_t
-CONST uint kTrQuadratic = 2u;         // max_t
-CONST uint kTrDoubleExponential = 3u; // sigma_a, sigma_b
-CONST uint kTrErlang = 4u;            // rate
-CONST uint kTrDavis = 5u;             // alpha
-CONST uint kTrDavisWeinstein = 6u;    // h, c
-CONST uint kTrPulse = 7u;             // min, max, num_pulses
-CONST uint kTrInterpolated = 8u;      // tr_a, tr_b (simple models), ratio
-CONST uint kTrModelCount = 9u;
+// Model types: kTr* (shared/enums.h).
 
 // ---- Segment forms by endpoint type ----
 CONST uint kFormSurfaceSurface = 0u;

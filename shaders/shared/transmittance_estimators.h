@@ -21,14 +21,6 @@
 
 SHADER_NAMESPACE_BEGIN
 
-CONST uint kTrEstRayMarch = 0u;             // biased, 2^k jittered points
-CONST uint kTrEstDebiasedRayMarch = 1u;     // correlated single-term telescope over levels
-CONST uint kTrEstDeltaTracking = 2u;
-CONST uint kTrEstRatioTracking = 3u;
-CONST uint kTrEstResidualRatioTracking = 4u;
-CONST uint kTrEstUnbiasedRayMarch = 5u;     // Kettunen et al. 2021
-CONST uint kTrEstCount = 6u;
-
 // Largest comb of debiased marching: 2^kTrMaxCombLog2 points; deeper levels are marched at this
 // size (a truncation of the telescope). Why a cap at all: (1) in single precision the correction's
 // rounding error, about 1e-7 g, is divided by p(j), so its second moment grows like

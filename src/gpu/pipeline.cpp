@@ -189,26 +189,21 @@ void ComputePipeline::bindBuffers(const std::vector<const Buffer*>& buffers) {
     std::vector<VkDescriptorBufferInfo> infos(buffers.size());
     std::vector<VkWriteDescriptorSet> writes(buffers.size());
     for (size_t i = 0; i < buffers.size(); ++i) {
-        if ((uniformBindings_ >> i) & 1u) {
+        const bool uniform = (uniformBindings_ >> i) & 1u;
+        if (uniform) {
             infos[i] = {buffers[i]->handle(), 0, std::min(buffers[i]->size(), maxUniformRange)};
-            writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-            writes[i].dstSet = set_;
-            writes[i].dstBinding = uint32_t(i);
-            writes[i].descriptorCount = 1;
-            writes[i].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
-            writes[i].pBufferInfo = &infos[i];
-            continue;
+        } else {
+            if (buffers[i]->size() > maxRange)
+                throw std::runtime_error(fmt::format(
+                    "buffer '{}' ({} bytes) exceeds the storage-buffer binding limit ({} bytes); reach it by device address",
+                    buffers[i]->name(), buffers[i]->size(), maxRange));
+            infos[i] = {buffers[i]->handle(), 0, VK_WHOLE_SIZE};
         }
-        if (buffers[i]->size() > maxRange)
-            throw std::runtime_error(fmt::format(
-                "buffer '{}' ({} bytes) exceeds the storage-buffer binding limit ({} bytes); reach it by device address",
-                buffers[i]->name(), buffers[i]->size(), maxRange));
-        infos[i] = {buffers[i]->handle(), 0, VK_WHOLE_SIZE};
         writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
         writes[i].dstSet = set_;
         writes[i].dstBinding = uint32_t(i);
         writes[i].descriptorCount = 1;
-        writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        writes[i].descriptorType = uniform ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
         writes[i].pBufferInfo = &infos[i];
     }
     vkUpdateDescriptorSets(context_.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);

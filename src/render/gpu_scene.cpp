@@ -54,7 +54,7 @@ shader::MediumGpu mediumToGpu(const Medium& m, std::vector<float>& gridData) {
     g.falloffDir = m.falloffDirection;
     g.falloffScale = m.falloffScale;
     g.unitPoint = m.unitPoint;
-    g.phase = m.phase;
+    g.phase = uint32_t(m.phase);
     g.phaseG = m.phaseG;
     g.model.type = m.transmittance.type;
     g.model.typeA = m.transmittance.typeA;
@@ -149,13 +149,13 @@ GpuScene buildGpuScene(const Scene& scene) {
         shader::LightGpu l{};
         l.radiance = pl.intensity;
         if (pl.type == LightType::Point) {
-            l.type = shader::kLightPoint;
+            l.type = uint32_t(pl.type);  // LightType takes its values from kLight*
             l.position = pl.position;
             power.push_back(4.0f * glm::pi<float>() * lum);
             f.pointLights = true;
         } else {
             if (f.environment) continue;  // one environment; the loader rejects more
-            l.type = shader::kLightEnvironment;
+            l.type = uint32_t(pl.type);
             float r = 0.5f * f.sceneExtent;
             power.push_back(lum * glm::pi<float>() * 4.0f * glm::pi<float>() * r * r);
             f.environment = true;

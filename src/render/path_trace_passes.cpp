@@ -146,11 +146,7 @@ public:
         pipeline_.bindBuffers(
             {b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims});
         const Camera& cam = scene.camera;
-        push_.cameraPosition = cam.position;
-        push_.cameraRight = cam.right;
-        push_.cameraUp = cam.up;
-        push_.cameraForward = cam.forward;
-        push_.planeDistance = 1.0f / std::tan(0.5f * glm::radians(cam.fovDegrees));
+        setPushCamera(push_, cam);
         push_.width = cam.width;
         push_.height = cam.height;
         push_.seed = seed;
@@ -166,11 +162,7 @@ public:
     }
 
     bool setCamera(const Camera& cam) override {
-        push_.cameraPosition = cam.position;
-        push_.cameraRight = cam.right;
-        push_.cameraUp = cam.up;
-        push_.cameraForward = cam.forward;
-        push_.planeDistance = 1.0f / std::tan(0.5f * glm::radians(cam.fovDegrees));
+        setPushCamera(push_, cam);
         return true;
     }
 

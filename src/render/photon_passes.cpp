@@ -145,7 +145,7 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
         {kSpecPhotonEstimator, unbiased(in) ? kPhotonUnbiased : kPhotonBiased},
         {kSpecPhotonKernel, uint32_t(ph.kernel)},
-        {kSpecPhotonSchedule, perPixel(in) ? kPhotonSchedulePerPixel : kPhotonScheduleUniform},
+        {kSpecPhotonSchedule, perPixel(in) ? kLevelSchedulePerPixel : kLevelScheduleUniform},
         {kSpecPhotonNextEvent, nee},
         {kSpecPhotonMaxBounces, in.maxBounces},
     };
@@ -175,11 +175,7 @@ public:
         tracePush_.pathCount = paths;
         tracePush_.seed = seed;
         tracePush_.pathScale = 1.0f / float(paths);
-        gatherPush_.cameraPosition = cam.position;
-        gatherPush_.cameraRight = cam.right;
-        gatherPush_.cameraUp = cam.up;
-        gatherPush_.cameraForward = cam.forward;
-        gatherPush_.planeDistance = 1.0f / std::tan(0.5f * glm::radians(cam.fovDegrees));
+        setPushCamera(gatherPush_, cam);
         gatherPush_.width = cam.width;
         gatherPush_.height = cam.height;
         gatherPush_.seed = seed;
@@ -195,11 +191,7 @@ public:
     }
 
     bool setCamera(const Camera& cam) override {
-        gatherPush_.cameraPosition = cam.position;
-        gatherPush_.cameraRight = cam.right;
-        gatherPush_.cameraUp = cam.up;
-        gatherPush_.cameraForward = cam.forward;
-        gatherPush_.planeDistance = 1.0f / std::tan(0.5f * glm::radians(cam.fovDegrees));
+        setPushCamera(gatherPush_, cam);
         passInBlock_ = 0;  // blocks of the old camera are dropped, never mixed into the new one
         blockBuffer_.fill(0);
         return true;

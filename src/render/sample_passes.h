@@ -15,8 +15,19 @@
 #include "gpu/pipeline.h"
 #include "render/render_plan.h"
 #include "scene/scene.h"
+#include "shared/camera.h"
 
 namespace telescope {
+
+// The camera part of a camera pass's push constants (PathTracePush, GatherPush).
+template <class Push>
+void setPushCamera(Push& push, const Camera& cam) {
+    push.cameraPosition = cam.position;
+    push.cameraRight = cam.right;
+    push.cameraUp = cam.up;
+    push.cameraForward = cam.forward;
+    push.planeDistance = shader::cameraPlaneDistance(cam.fovDegrees);
+}
 
 // Buffers the integrators read: the scene (bindings 0..3), the accumulation (by address) and the
 // media (path tracer only).

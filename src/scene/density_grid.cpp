@@ -1,5 +1,7 @@
 #include "scene/density_grid.h"
 
+#include "shared/density_grid.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -91,22 +93,11 @@ DensityGrid linearGrid(glm::uvec3 resolution, float from, float to) {
 }
 
 float sampleGrid(const DensityGrid& grid, glm::vec3 unit) {
-    if (unit.x < 0 || unit.y < 0 || unit.z < 0 || unit.x > 1 || unit.y > 1 || unit.z > 1) return 0.0f;
-    glm::vec3 res(grid.resolution);
-    glm::vec3 c = glm::clamp(unit * res - 0.5f, glm::vec3(0.0f), res - 1.0f);
-    glm::uvec3 i0(glm::floor(c));
-    glm::uvec3 i1 = glm::min(i0 + 1u, grid.resolution - 1u);
-    glm::vec3 t = c - glm::vec3(i0);
-    auto at = [&](uint32_t x, uint32_t y, uint32_t z) {
-        return grid.density[(size_t(z) * grid.resolution.y + y) * grid.resolution.x + x];
-    };
-    float v = 0.0f;
-    for (int dz = 0; dz < 2; ++dz)
-        for (int dy = 0; dy < 2; ++dy)
-            for (int dx = 0; dx < 2; ++dx)
-                v += (dx ? t.x : 1 - t.x) * (dy ? t.y : 1 - t.y) * (dz ? t.z : 1 - t.z) *
-                     at(dx ? i1.x : i0.x, dy ? i1.y : i0.y, dz ? i1.z : i0.z);
-    return v;
+    shader::GridStencil g;
+    if (!shader::gridStencil(grid.resolution, unit, g)) return 0.0f;
+    const float* v = grid.density.data() + g.corner;
+    const uint32_t x = g.step.x, y = g.step.y, z = g.step.z;
+    return shader::gridTrilinear(g.t, v[0], v[x], v[y], v[x + y], v[z], v[x + z], v[y + z], v[x + y + z]);
 }
 
 }  // namespace telescope

@@ -13,9 +13,14 @@
 #include <glm/glm.hpp>
 #include <nlohmann/json.hpp>
 
+#include "shared/enums.h"  // the values of every enum below: one definition for host and shaders
+
 namespace telescope {
 
-enum class BsdfType : uint32_t { Lambert = 0, Mirror = 1, Dielectric = 2, Null = 3, Forward = 4 };
+enum class BsdfType : uint32_t {
+    Lambert = shader::kBsdfLambert, Mirror = shader::kBsdfMirror, Dielectric = shader::kBsdfDielectric,
+    Null = shader::kBsdfNull, Forward = shader::kBsdfForward
+};
 
 struct Material {
     std::string name;
@@ -25,7 +30,7 @@ struct Material {
     bool enableRefraction = true;  // dielectric only
 };
 
-enum class GeometryType : uint32_t { Triangle = 0, Sphere = 1, Disk = 2 };
+enum class GeometryType : uint32_t { Triangle = shader::kPrimTriangle, Sphere = shader::kPrimSphere, Disk = shader::kPrimDisk };
 
 // One ray-traceable primitive in world space.
 struct Geometry {
@@ -44,7 +49,10 @@ struct Geometry {
 };
 
 // ---- Participating media (docs/MEDIA.md) ----
-enum class MediumType : uint32_t { Homogeneous = 0, Exponential = 1, Grid = 2 };
+enum class MediumType : uint32_t {
+    Homogeneous = shader::kMediumHomogeneous, Exponential = shader::kMediumExponential, Grid = shader::kMediumGrid
+};
+enum class PhaseFunction : uint32_t { Isotropic = shader::kPhaseIsotropic, HenyeyGreenstein = shader::kPhaseHenyeyGreenstein };
 
 // A transmittance model (shaders/shared/transmittance.h: kTr* types and their parameters).
 // Interpolated: typeA/paramsA and typeB/paramsB are the two models, mixed by ratio.
@@ -74,18 +82,19 @@ struct Medium {
     glm::vec3 unitPoint{0.0f};                   // exponential
     glm::vec3 falloffDirection{0.0f, 1.0f, 0.0f};  // exponential, unit
     DensityGrid grid;                            // grid
-    uint32_t phase = 0;                          // 0 isotropic, 1 henyey_greenstein
+    PhaseFunction phase = PhaseFunction::Isotropic;
     float phaseG = 0.0f;
     TransmittanceModel transmittance;
 };
 
 enum class TransmittanceEstimatorType : uint32_t {
-    RayMarch = 0, DebiasedRayMarch = 1, DeltaTracking = 2, RatioTracking = 3, ResidualRatioTracking = 4,
-    UnbiasedRayMarch = 5
+    RayMarch = shader::kTrEstRayMarch, DebiasedRayMarch = shader::kTrEstDebiasedRayMarch,
+    DeltaTracking = shader::kTrEstDeltaTracking, RatioTracking = shader::kTrEstRatioTracking,
+    ResidualRatioTracking = shader::kTrEstResidualRatioTracking, UnbiasedRayMarch = shader::kTrEstUnbiasedRayMarch
 };
 const char* transmittanceEstimatorName(TransmittanceEstimatorType t);
 
-enum class LightType : uint32_t { Point = 0, Environment = 1 };
+enum class LightType : uint32_t { Point = shader::kLightPoint, Environment = shader::kLightEnvironment };
 
 // Non-geometric emitters (area lights are the emissive Geometry entries).
 struct PointLikeLight {
@@ -109,8 +118,8 @@ struct Camera {
 // Settings of the debiasing telescope (docs/ESTIMATORS.md sections 1-2).
 // Auto: chosen by a pilot render before the render proper (src/study/pmf_pilot.h); the shaders
 // only ever see Geometric or PowerLaw.
-enum class PmfType : uint32_t { Geometric = 0, PowerLaw = 1, Auto = 2 };
-enum class DebiasEstimator : uint32_t { None = 0, SingleTerm = 1, Sum = 2 };
+enum class PmfType : uint32_t { Geometric = shader::kPmfGeometric, PowerLaw = shader::kPmfPowerLaw, Auto = 0x7fffffff /* host only */ };
+enum class DebiasEstimator : uint32_t { None = shader::kDebiasNone, SingleTerm = shader::kDebiasSingleTerm, Sum = shader::kDebiasSum };
 
 struct PmfSettings {
     PmfType type = PmfType::Geometric;
@@ -129,7 +138,9 @@ PmfSettings defaultTransmittancePmf();
 constexpr uint32_t kNoPilotLevel = 0xffffffffu;
 
 // How per-sample levels are laid out on the device's lanes (shared/gpu_types.h kLevelSchedule*).
-enum class LevelSchedule : uint32_t { PerPixel = 0, Uniform = 1, Queued = 2 };
+enum class LevelSchedule : uint32_t {
+    PerPixel = shader::kLevelSchedulePerPixel, Uniform = shader::kLevelScheduleUniform, Queued = shader::kLevelScheduleQueued
+};
 
 // Photon mapping's blocks (docs/PHOTON-MAPPING.md, scene/photon_levels.h): level k of a block
 // has kernel area s^k times the base and m^k photon passes; levels k < K.
@@ -152,7 +163,7 @@ struct DebiasSettings {
 enum class IntegratorType : uint32_t { PathTracer = 0, PhotonMap = 1, ProgressivePhotonMap = 2 };
 
 // Photon mapping (docs/ESTIMATORS.md section 3). Tungsten's key names where Tungsten has the setting.
-enum class PhotonKernel : uint32_t { Cone = 0, Uniform = 1, Epanechnikov = 2 };
+enum class PhotonKernel : uint32_t { Cone = shader::kKernelCone, Uniform = shader::kKernelUniform, Epanechnikov = shader::kKernelEpanechnikov };
 enum class DirectLighting : uint32_t { Photons = 0, NextEvent = 1 };
 
 struct PhotonSettings {

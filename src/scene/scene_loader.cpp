@@ -1048,10 +1048,10 @@ Medium SceneReader::readMedium(const json& v, const std::string& key) {
         expectObject(*phase, pk);
         const std::string ptype = find(*phase, "type") ? string((*phase)["type"], member(pk, "type")) : "isotropic";
         if (ptype == "isotropic") {
-            m.phase = 0;
+            m.phase = PhaseFunction::Isotropic;
             ignoreUnread(*phase, pk, {"type"});
         } else if (ptype == "henyey_greenstein") {
-            m.phase = 1;
+            m.phase = PhaseFunction::HenyeyGreenstein;
             if (const json* g = find(*phase, "g")) m.phaseG = number(*g, member(pk, "g"));
             if (!(m.phaseG > -1.0f && m.phaseG < 1.0f)) fail(member(pk, "g"), "must be in (-1, 1)");
             ignoreUnread(*phase, pk, {"type", "g"});

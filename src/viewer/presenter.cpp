@@ -41,6 +41,17 @@ void imageBarrier(VkCommandBuffer cmd, VkImage image, VkImageLayout from, VkImag
     vkCmdPipelineBarrier(cmd, srcStage, dstStage, 0, 0, nullptr, 0, nullptr, 1, &b);
 }
 
+void bufferBarrier(VkCommandBuffer cmd, VkBuffer buffer, VkAccessFlags srcAccess, VkAccessFlags dstAccess,
+                   VkPipelineStageFlags srcStage, VkPipelineStageFlags dstStage) {
+    VkBufferMemoryBarrier b{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER};
+    b.srcAccessMask = srcAccess;
+    b.dstAccessMask = dstAccess;
+    b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    b.buffer = buffer;
+    b.size = VK_WHOLE_SIZE;
+    vkCmdPipelineBarrier(cmd, srcStage, dstStage, 0, 0, nullptr, 1, &b, 0, nullptr);
+}
+
 }  // namespace
 
 Presenter::Presenter(gpu::Context& context, VkSurfaceKHR surface, VkExtent2D windowSize)
@@ -195,14 +206,8 @@ bool Presenter::present(shader::ViewPush push, VkDeviceAddress accumAddress, VkE
     vkCmdDispatch(cmd_, (extent_.width + shader::kViewGroupSize - 1) / shader::kViewGroupSize,
                   (extent_.height + shader::kViewGroupSize - 1) / shader::kViewGroupSize, 1);
 
-    VkBufferMemoryBarrier written{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER};
-    written.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-    written.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
-    written.srcQueueFamilyIndex = written.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    written.buffer = pixels_.handle();
-    written.size = VK_WHOLE_SIZE;
-    vkCmdPipelineBarrier(cmd_, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 1,
-                         &written, 0, nullptr);
+    bufferBarrier(cmd_, pixels_.handle(), VK_ACCESS_SHADER_WRITE_BIT, VK_ACCESS_TRANSFER_READ_BIT,
+                  VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT);
     VkImage image = images_[index];
     imageBarrier(cmd_, image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 0,
                  VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT);
@@ -216,14 +221,8 @@ bool Presenter::present(shader::ViewPush push, VkDeviceAddress accumAddress, VkE
         imageBarrier(cmd_, image, layout, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_ACCESS_TRANSFER_WRITE_BIT,
                      VK_ACCESS_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT);
         vkCmdCopyImageToBuffer(cmd_, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, readback_.handle(), 1, &region);
-        VkBufferMemoryBarrier toHost{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER};
-        toHost.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-        toHost.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-        toHost.srcQueueFamilyIndex = toHost.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-        toHost.buffer = readback_.handle();
-        toHost.size = VK_WHOLE_SIZE;
-        vkCmdPipelineBarrier(cmd_, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0, nullptr, 1, &toHost,
-                             0, nullptr);
+        bufferBarrier(cmd_, readback_.handle(), VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_HOST_READ_BIT,
+                      VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT);
         layout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
         lastAccess = 0;
     }
