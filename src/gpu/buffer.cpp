@@ -46,6 +46,7 @@ Buffer::Buffer(const Context& context, VkDeviceSize size, std::string name)
         VK_CHECK(r);
         VK_CHECK(vkBindBufferMemory(device, buffer_, memory_, 0));
         if (mappable) VK_CHECK(vkMapMemory(device, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
+        mappedCached_ = mappable && context.memoryTypeHas(type, VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
 
         VkBufferDeviceAddressInfo addressInfo{VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO};
         addressInfo.buffer = buffer_;
@@ -69,6 +70,7 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
         size_ = std::exchange(o.size_, 0);
         address_ = std::exchange(o.address_, 0);
         mapped_ = std::exchange(o.mapped_, nullptr);
+        mappedCached_ = std::exchange(o.mappedCached_, false);
         name_ = std::move(o.name_);
     }
     return *this;
@@ -98,7 +100,10 @@ void Buffer::download(void* data, VkDeviceSize bytes, VkDeviceSize offset) const
         throw std::out_of_range(fmt::format("download of {} bytes at {} overruns buffer '{}' ({} bytes)", bytes,
                                             offset, name_, size_));
     if (bytes == 0) return;
-    if (mapped_) std::memcpy(data, static_cast<const char*>(mapped_) + offset, bytes);
+    // Device-local memory that is also host-visible but uncached (a resizable-BAR GPU) is written
+    // fast through the mapping and read very slowly: reads go through a HOST_CACHED staging buffer
+    // there. On lavapipe and integrated GPUs the one memory type is cached and read directly.
+    if (mapped_ && mappedCached_) std::memcpy(data, static_cast<const char*>(mapped_) + offset, bytes);
     else copyViaStaging(data, bytes, offset, false);
 }
 
@@ -124,9 +129,16 @@ void Buffer::copyViaStaging(void* host, VkDeviceSize bytes, VkDeviceSize offset,
         VK_CHECK(vkCreateBuffer(device, &info, nullptr, &staging));
         VkMemoryRequirements req;
         vkGetBufferMemoryRequirements(device, staging, &req);
-        uint32_t type = context_->findMemoryType(
-            req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+        // Readback prefers cached memory (coherent if there is such, else invalidated after the copy).
+        const VkMemoryPropertyFlags visible = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
+                                    coherent = VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+                                    cached = VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
+        uint32_t type = UINT32_MAX;
+        if (!toDevice) type = context_->findMemoryType(req.memoryTypeBits, visible | coherent | cached);
+        if (!toDevice && type == UINT32_MAX) type = context_->findMemoryType(req.memoryTypeBits, visible | cached);
+        if (type == UINT32_MAX) type = context_->findMemoryType(req.memoryTypeBits, visible | coherent);
         if (type == UINT32_MAX) throw std::runtime_error("no host-visible memory for staging");
+        const bool invalidate = !context_->memoryTypeHas(type, coherent);
         VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
         alloc.allocationSize = req.size;
         alloc.memoryTypeIndex = type;
@@ -140,6 +152,12 @@ void Buffer::copyViaStaging(void* host, VkDeviceSize bytes, VkDeviceSize offset,
         if (toDevice) vkCmdCopyBuffer(once.cmd(), staging, buffer_, 1, &region);
         else vkCmdCopyBuffer(once.cmd(), buffer_, staging, 1, &region);
         once.submit();
+        if (!toDevice && invalidate) {
+            VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
+            range.memory = memory;
+            range.size = VK_WHOLE_SIZE;
+            VK_CHECK(vkInvalidateMappedMemoryRanges(device, 1, &range));
+        }
         if (!toDevice) std::memcpy(host, p, bytes);
     } catch (...) {
         cleanup();

@@ -57,6 +57,7 @@ private:
     VkDeviceSize size_ = 0;
     VkDeviceAddress address_ = 0;
     void* mapped_ = nullptr;
+    bool mappedCached_ = false;  // the mapping is HOST_CACHED: reads through it are fast
     std::string name_;
 };
 

@@ -65,6 +65,9 @@ public:
 
     // Finds a memory type with the given properties; returns UINT32_MAX when there is none.
     uint32_t findMemoryType(uint32_t typeBits, VkMemoryPropertyFlags required) const;
+    bool memoryTypeHas(uint32_t type, VkMemoryPropertyFlags flags) const {
+        return type < memoryProperties_.memoryTypeCount && (memoryProperties_.memoryTypes[type].propertyFlags & flags) == flags;
+    }
 
     // Submits one command buffer and waits for it.
     void submitAndWait(VkCommandBuffer cmd) const;
