@@ -22,7 +22,7 @@
 #include "scene/scene_loader.h"
 #include "scene/settings_json.h"
 #include "study/converge.h"
-#include "study/pmf_pilot.h"
+#include "render/pmf_pilot.h"
 #include "study/reference.h"
 #include "study/transmittance_study.h"
 

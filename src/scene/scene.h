@@ -107,7 +107,7 @@ struct Camera {
 };
 
 // Settings of the debiasing telescope (docs/ESTIMATORS.md sections 1-2).
-// Auto: chosen by a pilot render before the render proper (src/study/pmf_pilot.h); the shaders
+// Auto: chosen by a pilot render before the render proper (src/render/pmf_pilot.h); the shaders
 // only ever see Geometric or PowerLaw.
 enum class PmfType : uint32_t { Geometric = 0, PowerLaw = 1, Auto = 2 };
 enum class DebiasEstimator : uint32_t { None = 0, SingleTerm = 1, Sum = 2 };

@@ -15,7 +15,7 @@
 #include "render/image_output.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
-#include "study/pmf_pilot.h"
+#include "render/pmf_pilot.h"
 #include "study/study_files.h"
 
 namespace fs = std::filesystem;

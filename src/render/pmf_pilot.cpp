@@ -1,4 +1,4 @@
-#include "study/pmf_pilot.h"
+#include "render/pmf_pilot.h"
 
 #include <algorithm>
 #include <cmath>
