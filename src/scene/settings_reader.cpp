@@ -29,18 +29,6 @@ PmfSettings defaultTransmittancePmf() {
     return p;
 }
 
-const char* transmittanceEstimatorName(TransmittanceEstimatorType t) {
-    switch (t) {
-        case TransmittanceEstimatorType::RayMarch: return "ray_march";
-        case TransmittanceEstimatorType::DebiasedRayMarch: return "debiased_ray_march";
-        case TransmittanceEstimatorType::DeltaTracking: return "delta_tracking";
-        case TransmittanceEstimatorType::RatioTracking: return "ratio_tracking";
-        case TransmittanceEstimatorType::ResidualRatioTracking: return "residual_ratio_tracking";
-        case TransmittanceEstimatorType::UnbiasedRayMarch: return "unbiased_ray_march";
-    }
-    return "?";
-}
-
 namespace scene_reader {
 
 namespace {
