@@ -4,7 +4,8 @@
 // hash_grid_build and gather); the Renderer batches their units into submits, times every
 // dispatch by name and stops at a sample count or a time limit.
 //
-// A Renderer owns the scene buffers, the accumulation buffer and the pipelines. render() may be
+// A Renderer owns the scene buffers, the accumulation buffer, the pipelines and the camera and
+// integrator settings: the Scene it was made from need not outlive it. render() may be
 // called repeatedly: samples continue from where the last call stopped (their random numbers
 // depend only on pixel, global sample index and seed), so a render can be extended, and renders
 // with different seeds can be merged.
@@ -94,7 +95,10 @@ public:
 
 private:
     gpu::Context& context_;
-    const Scene& scene_;
+    // What a render reads of the scene after construction, owned (the scene buffers hold the
+    // rest): a Renderer may outlive the Scene it was made from.
+    Camera camera_;
+    IntegratorSettings integrator_;
     uint32_t seed_;
     GpuScene gpuScene_;
     RenderPlan plan_;
