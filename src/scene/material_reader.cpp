@@ -26,10 +26,7 @@ void SceneReader::readBsdfs(const json& list) {
 }
 
 Material SceneReader::readBsdf(const json& v, const std::string& key) {
-    expectObject(v, key);
-    const json* typeValue = find(v, "type");
-    if (!typeValue) fail(key, "missing 'type'");
-    const std::string type = string(*typeValue, member(key, "type"));
+    const std::string type = requiredType(v, key);
 
     Material m;
     if (type == "lambert") m.type = BsdfType::Lambert;

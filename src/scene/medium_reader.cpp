@@ -83,11 +83,8 @@ int32_t SceneReader::mediumRef(const json& ref, const std::string& key) {
 }
 
 Medium SceneReader::readMedium(const json& v, const std::string& key) {
-    expectObject(v, key);
-    const json* typeValue = find(v, "type");
-    if (!typeValue) fail(key, "missing 'type'");
+    const std::string type = requiredType(v, key);
     const std::string typeKey = member(key, "type");
-    const std::string type = string(*typeValue, typeKey);
     Medium m;
     if (type == "homogeneous") m.type = MediumType::Homogeneous;
     else if (type == "exponential") m.type = MediumType::Exponential;
@@ -136,7 +133,7 @@ Medium SceneReader::readMedium(const json& v, const std::string& key) {
     if (const json* phase = find(v, "phase_function")) {
         const std::string pk = member(key, "phase_function");
         expectObject(*phase, pk);
-        const std::string ptype = find(*phase, "type") ? string((*phase)["type"], member(pk, "type")) : "isotropic";
+        const std::string ptype = typeOr(*phase, pk, "isotropic");
         if (ptype == "isotropic") {
             m.phase = 0;
             ignoreUnread(*phase, pk, {"type"});
@@ -159,7 +156,7 @@ Medium SceneReader::readMedium(const json& v, const std::string& key) {
 // Tungsten's transmittance models with its parameter names and defaults.
 TransmittanceModel SceneReader::readTransmittance(const json& v, const std::string& key, bool nested) {
     expectObject(v, key);
-    const std::string type = find(v, "type") ? string(v["type"], member(key, "type")) : "exponential";
+    const std::string type = typeOr(v, key, "exponential");
     if (type == "interpolated") {
         if (nested) fail(member(key, "type"), "an interpolated transmittance cannot nest another interpolated one");
         const TransmittanceModel a = find(v, "tr_a") ? readTransmittance(v["tr_a"], member(key, "tr_a"), true)
@@ -208,7 +205,7 @@ TransmittanceModel SceneReader::readTransmittance(const json& v, const std::stri
 // ("vdb") need libopenvdb, which this build does not use.
 DensityGrid SceneReader::readGrid(const json& v, const std::string& key) {
     expectObject(v, key);
-    const std::string type = find(v, "type") ? string(v["type"], member(key, "type")) : "";
+    const std::string type = typeOr(v, key, "");
     if (type == "vdb")
         fail(member(key, "type"), "OpenVDB grids are not supported by this build of Telescope (no libopenvdb); "
                                   "use a \"procedural_cloud\" or \"constant\" grid");

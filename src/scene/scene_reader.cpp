@@ -108,6 +108,18 @@ glm::mat4 SceneReader::transform(const json& v, const std::string& key) {
     return buildTransform(spec);
 }
 
+std::string SceneReader::requiredType(const json& v, const std::string& key) const {
+    expectObject(v, key);
+    const json* type = find(v, "type");
+    if (!type) fail(key, "missing 'type'");
+    return string(*type, member(key, "type"));
+}
+
+std::string SceneReader::typeOr(const json& v, const std::string& key, const char* fallback) const {
+    const json* type = find(v, "type");
+    return type ? string(*type, member(key, "type")) : fallback;
+}
+
 // ---- Bookkeeping of keys ----
 
 void SceneReader::ignore(const std::string& key) {

@@ -75,6 +75,9 @@ private:
     glm::vec3 vec3(const json& v, const std::string& key) const;
     glm::vec3 colour(const json& v, const std::string& key) const;
     glm::mat4 transform(const json& v, const std::string& key);
+    // The "type" of an object: required (the object itself must be one), or with a fallback.
+    std::string requiredType(const json& v, const std::string& key) const;
+    std::string typeOr(const json& v, const std::string& key, const char* fallback) const;
 
     // Bookkeeping of keys (scene_reader.cpp)
     void ignore(const std::string& key);

@@ -54,7 +54,7 @@ void SceneReader::readCamera(const json& v) {
     expectObject(v, key);
     Camera& cam = scene_.camera;
 
-    const std::string type = find(v, "type") ? string(v["type"], "camera.type") : "pinhole";
+    const std::string type = typeOr(v, key, "pinhole");
     if (isOneOf(kUnsupportedCameras, type)) fail("camera.type", fmt::format("unsupported camera type '{}'", type));
     if (type != "pinhole") fail("camera.type", fmt::format("unknown camera type '{}'", type));
     if (const json* medium = find(v, "medium"); medium && !medium->is_null()) cam.medium = mediumRef(*medium, "camera.medium");
@@ -98,7 +98,7 @@ void SceneReader::readIntegrator(const json& v) {
     expectObject(v, key);
     IntegratorSettings& s = scene_.integrator;
 
-    const std::string type = find(v, "type") ? string(v["type"], "integrator.type") : "path_tracer";
+    const std::string type = typeOr(v, key, "path_tracer");
     if (isOneOf(kUnsupportedIntegrators, type)) fail("integrator.type", fmt::format("unsupported integrator type '{}'", type));
     if (type == "photon_map" || type == "progressive_photon_map") {
         s.type = type == "photon_map" ? IntegratorType::PhotonMap : IntegratorType::ProgressivePhotonMap;
@@ -265,7 +265,7 @@ void SceneReader::readDebias(const json& v, const std::string& key, bool photons
 // Keys not given keep their value in pmf (the default of the telescope it belongs to).
 PmfSettings SceneReader::readPmf(const json& v, const std::string& key, PmfSettings pmf, bool allowAuto) const {
     expectObject(v, key);
-    const std::string type = find(v, "type") ? string(v["type"], member(key, "type")) : "geometric";
+    const std::string type = typeOr(v, key, "geometric");
     auto openUnit = [&](const char* field) {
         const std::string fieldKey = member(key, field);
         const float x = number(v[field], fieldKey);

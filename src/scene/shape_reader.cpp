@@ -40,11 +40,8 @@ void appendParallelogram(std::vector<Geometry>& out, const glm::vec3& base, cons
 }  // namespace
 
 void SceneReader::readPrimitive(const json& v, const std::string& key) {
-    expectObject(v, key);
-    const json* typeValue = find(v, "type");
-    if (!typeValue) fail(key, "missing 'type'");
+    const std::string type = requiredType(v, key);
     const std::string typeKey = member(key, "type");
-    const std::string type = string(*typeValue, typeKey);
     const bool known = isOneOf({"quad", "cube", "sphere", "disk", "mesh", "point", "infinite_sphere"}, type);
     if (!known && isOneOf(kUnsupportedPrimitives, type)) fail(typeKey, fmt::format("unsupported primitive type '{}'", type));
     if (!known) fail(typeKey, fmt::format("unknown primitive type '{}'", type));
