@@ -68,7 +68,8 @@ struct RenderStats {
 
 class Renderer {
 public:
-    Renderer(gpu::Context& context, const Scene& scene, uint32_t seed);
+    // pilotLevel: the pmf pilot's first fixed level (render_plan.h); kNoPilotLevel for a render.
+    Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uint32_t pilotLevel = kNoPilotLevel);
     ~Renderer();
 
     const RenderPlan& plan() const { return plan_; }
@@ -78,7 +79,7 @@ public:
     // first render() call.
     void resume(const Film& film);
     Film film() const;  // downloads the accumulation
-    // The pmf pilot only (a scene with integrator.pilotLevel set): starts again from an empty
+    // The pmf pilot only (a Renderer made with a pilot level): starts again from an empty
     // film at another fixed level, with the same pipelines and the same random numbers (sample
     // indices restart at 0). Stats restart too, except the setup time.
     void restartAtPilotLevel(uint32_t level);

@@ -126,8 +126,6 @@ struct PmfSettings {
 PmfSettings defaultPathDepthPmf();
 PmfSettings defaultTransmittancePmf();
 
-constexpr uint32_t kNoPilotLevel = 0xffffffffu;
-
 // How per-sample levels are laid out on the device's lanes (shared/gpu_types.h kLevelSchedule*).
 enum class LevelSchedule : uint32_t { PerPixel = 0, Uniform = 1, Queued = 2 };
 
@@ -180,9 +178,6 @@ struct IntegratorSettings {
     PhotonSettings photon;  // photon_map and progressive_photon_map only
     // "transmittance_estimator": how every transmittance factor of a path is estimated.
     TransmittanceEstimatorSettings transmittance;
-    // Set by the pmf pilot only (not a scene key): every sample takes this level and records the
-    // unweighted correction D_j instead of its estimate, with no base.
-    uint32_t pilotLevel = kNoPilotLevel;
 };
 
 inline bool usesPhotons(const IntegratorSettings& s) { return s.type != IntegratorType::PathTracer; }
