@@ -20,7 +20,7 @@
 
 #include "region_stats.h"
 #include "render_harness.h"
-#include "study/pmf_pilot.h"
+#include "render/pmf_pilot.h"
 
 using namespace telescope;
 using namespace telescope::test;

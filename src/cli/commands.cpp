@@ -22,7 +22,7 @@
 #include "scene/scene_loader.h"
 #include "scene/settings_json.h"
 #include "study/converge.h"
-#include "study/pmf_pilot.h"
+#include "render/pmf_pilot.h"
 #include "study/reference.h"
 #include "study/transmittance_study.h"
 
@@ -32,10 +32,9 @@ namespace telescope::cli {
 
 namespace {
 
-Scene loadWithOverrides(const CommonOptions& o, const std::vector<SceneOverride>& extra = {}) {
+Scene loadWithOverrides(const CommonOptions& o) {
     std::vector<SceneOverride> overrides;
     for (const auto& s : o.sets) overrides.push_back(parseOverride(s));
-    overrides.insert(overrides.end(), extra.begin(), extra.end());
     return loadScene(o.scenePath, overrides);
 }
 
@@ -147,6 +146,13 @@ void checkResumable(const Checkpoint& c, const std::string& path, const Scene& s
         throw InputError(path, "", fmt::format("checkpoint was rendered with seed {}, not {}", c.seed, seed));
 }
 
+// ... and to its estimator: the settings can differ from the document's (`reference` patches them).
+void checkSameEstimator(const Checkpoint& c, const std::string& path, const Renderer& renderer) {
+    if (c.estimator != renderer.plan().estimator)
+        throw InputError(path, "", fmt::format("checkpoint was rendered with another estimator ({}) than this one ({})",
+                                               c.estimator, renderer.plan().estimator));
+}
+
 void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Context& context, const Renderer& renderer,
                     const Film& film) {
     const RenderStats& stats = renderer.stats();
@@ -208,7 +214,10 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
     PmfPilotResult pilot;
     if (resolveAutoPmf(context, scene, o.seed, &pilot) && !common.quiet) fmt::print(stderr, "{}", pilot.summary());
     Renderer renderer(context, scene, o.seed);
-    if (resume) renderer.resume(resume->film);
+    if (resume) {
+        checkSameEstimator(*resume, o.resumePath, renderer);
+        renderer.resume(resume->film);
+    }
 
     RenderRequest request;
     request.timeLimit = o.timeLimit;
@@ -238,9 +247,9 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
 int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn) {
     ReferenceOptions o = optionsIn;
     if (o.output.checkpointPath.empty()) o.output.checkpointPath = o.output.exrPath + ".checkpoint";
-    Scene asGiven = loadWithOverrides(common);
-    UnbiasedSetup setup = unbiasedSetup(asGiven);
-    Scene scene = loadWithOverrides(common, setup.overrides);
+    Scene scene = loadWithOverrides(common);
+    const UnbiasedSetup setup = unbiasedSetup(scene);
+    scene.integrator = setup.integrator;
     checkImageOutputs(o.output);
     std::optional<Checkpoint> resume;
     if (fs::exists(o.output.checkpointPath)) {
@@ -257,7 +266,10 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
 
     gpu::Context context(contextOptions(common));
     Renderer renderer(context, scene, o.seed);
-    if (resume) renderer.resume(resume->film);
+    if (resume) {
+        checkSameEstimator(*resume, o.output.checkpointPath, renderer);
+        renderer.resume(resume->film);
+    }
     const OutputInfo info{scene.path,          scene.document.dump(),           renderer.plan().estimator,
                           context.info().name, resolvedSettings(scene).dump(), o.seed,
                           0.0};

@@ -44,7 +44,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     }
 
     // ---- Level schedule: only a debiased render (not the pilot) has levels to schedule ----
-    if (in.debias.estimator != DebiasEstimator::None && in.pilotLevel == kNoPilotLevel)
+    if (in.debias.estimator != DebiasEstimator::None && plan.pilotLevel == kNoPilotLevel)
         plan.levelSchedule = in.debias.schedule;
     if (plan.levelSchedule == LevelSchedule::Queued) {
         plan.passes.insert(plan.passes.begin(),
@@ -62,8 +62,8 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
                             fmt::format("pmf 'auto': before the render, {} spp at each of {} fixed levels measure the "
                                         "second moment and cost of the correction",
                                         in.debias.pmf.pilotSpp, in.debias.pmf.pilotLevels)});
-    if (in.pilotLevel != kNoPilotLevel) {
-        plan.estimator = fmt::format("pmf pilot: unweighted correction D_j at level j = k + {}, k = {}", in.pilotLevel,
+    if (plan.pilotLevel != kNoPilotLevel) {
+        plan.estimator = fmt::format("pmf pilot: unweighted correction D_j at level j = k + {}, k = {}", plan.pilotLevel,
                                      in.maxBounces);
     } else if (in.debias.estimator == DebiasEstimator::None) {
         plan.estimator = fmt::format("biased path tracing I(k), k = max_bounces = {}", in.maxBounces);
@@ -117,7 +117,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecEnvironmentLight, f.environmentLight},
         {kSpecMaxTraceDepth, std::max(shader::kTraceDepthCap, in.maxBounces + 1)},
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
-        {kSpecPilot, in.pilotLevel != kNoPilotLevel},
+        {kSpecPilot, plan.pilotLevel != kNoPilotLevel},
         {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},
         {kSpecTestPmfWeight, gpu::specFloat(in.debias.testPmfWeight)},
         {kSpecSceneInUniforms, f.fitsUniforms},
@@ -150,7 +150,7 @@ public:
         push_.width = cam.width;
         push_.height = cam.height;
         push_.seed = seed;
-        push_.pilotLevel = scene.integrator.pilotLevel;
+        push_.pilotLevel = plan.pilotLevel;
         push_.accumAddressLo = uint32_t(b.accum->address());
         push_.accumAddressHi = uint32_t(b.accum->address() >> 32);
         groupsX_ = (cam.width + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;

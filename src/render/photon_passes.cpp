@@ -158,7 +158,8 @@ class PhotonPasses : public SamplePasses {
 public:
     PhotonPasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan, const RenderBuffers& b,
                  uint32_t seed)
-        : scene_(scene),
+        : integrator_(scene.integrator),
+          camera_(scene.camera),
           seed_(seed),
           map_(context, scene.integrator.photon.photonCount),
           trace_(context, "photon_trace", shader::kSceneBindingCount, uint32_t(sizeof(shader::PhotonTracePush)),
@@ -206,7 +207,7 @@ public:
     // schedule 1 only for the last pass of a block.
     uint32_t recordUnit(gpu::CommandBatch& batch, uint64_t sampleBase, uint32_t samples) override {
         if (samples != 1) throw std::logic_error("a photon pass adds at most one sample per pixel");
-        const IntegratorSettings& in = scene_.integrator;
+        const IntegratorSettings& in = integrator_;
         if (blocks() && passInBlock_ == 0) {
             block_.level = uniformBlockLevel(in.debias, sampleBase, seed_);
             block_.passes = shader::photonBlockPasses(photonLevels(in.debias), block_.level);
@@ -234,7 +235,7 @@ public:
         gatherPush_.level = blocks() ? block_.level : 0;
         gatherPush_.passInBlock = passInBlock_;
         gatherPush_.sliceCount = slices_;
-        const Camera& cam = scene_.camera;
+        const Camera& cam = camera_;
         for (uint32_t slice = 0; slice < slices_; ++slice) {
             gatherPush_.slice = slice;
             batch.dispatch(gather_, &gatherPush_, sizeof(gatherPush_), (cam.width + 7) / 8, (cam.height + 7) / 8, 1,
@@ -281,14 +282,16 @@ public:
 
 private:
     // The uniform schedule's blocks (per_pixel keeps its blocks in the gather's buffer).
-    bool blocks() const { return unbiased(scene_.integrator) && !perPixel(scene_.integrator); }
+    bool blocks() const { return unbiased(integrator_) && !perPixel(integrator_); }
 
     struct UniformBlock {
         uint32_t level = 0;
         uint32_t passes = 1;  // m^level
     };
 
-    const Scene& scene_;
+    // What the passes read of the scene, owned: the passes may outlive the caller's Scene.
+    IntegratorSettings integrator_;
+    Camera camera_;  // resolution only (the gather's dispatch size)
     uint32_t seed_;
     PhotonMap map_;
     gpu::ComputePipeline trace_, gather_;

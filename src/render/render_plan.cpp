@@ -29,8 +29,11 @@ uint32_t filterConstant(const Camera& camera) {
     throw std::logic_error("unknown reconstruction filter '" + camera.filter + "' (the scene loader rejects it)");
 }
 
-RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
+RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f, uint32_t pilotLevel) {
     RenderPlan plan;
+    if (pilotLevel != kNoPilotLevel && usesPhotons(scene.integrator))
+        throw std::logic_error("the pmf pilot runs the path tracer only");
+    plan.pilotLevel = pilotLevel;
     if (usesPhotons(scene.integrator)) planPhotons(scene, f, plan);
     else planPathTrace(scene, f, plan);
     return plan;
@@ -38,7 +41,7 @@ RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f) {
 
 std::string describePlan(const Scene& scene, const RenderPlan& plan) {
     std::string s = fmt::format("scene: {}\nintegrator: {}\n", scene.path, plan.estimator);
-    if (scene.integrator.pilotLevel == kNoPilotLevel && !usesPhotons(scene.integrator) &&
+    if (plan.pilotLevel == kNoPilotLevel && !usesPhotons(scene.integrator) &&
         scene.integrator.debias.estimator != DebiasEstimator::None) {
         const PmfSettings& p = scene.integrator.debias.pmf;
         s += fmt::format("path-depth pmf: {}; {}\n", pmfDescription(p),

@@ -31,6 +31,11 @@ struct FeatureSwitch {
     std::string why;
 };
 
+// The pmf pilot's renders (render/pmf_pilot.h) take every sample at one fixed level and record the
+// unweighted correction D_j instead of the estimate: a way of running the path tracer, not a
+// setting of the scene.
+constexpr uint32_t kNoPilotLevel = 0xffffffffu;
+
 struct RenderPlan {
     std::vector<PlannedPass> passes;     // in dispatch order, per batch of samples
     std::vector<SkippedPass> skipped;
@@ -40,9 +45,10 @@ struct RenderPlan {
     std::string featuresOf = "path_trace";         // the pipeline(s) the feature switches describe
     std::string estimator;               // one line describing the estimator
     LevelSchedule levelSchedule = LevelSchedule::PerPixel;  // as run (per_pixel unless debiased)
+    uint32_t pilotLevel = kNoPilotLevel;  // the pmf pilot's first level (path tracer only)
 };
 
-RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& features);
+RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& features, uint32_t pilotLevel = kNoPilotLevel);
 
 // Human-readable plan, as `telescope plan` prints it.
 std::string describePlan(const Scene& scene, const RenderPlan& plan);

@@ -17,13 +17,13 @@ double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(
 constexpr uint32_t kMaxDispatchesPerBatch = 64;
 }  // namespace
 
-Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed)
-    : context_(context), scene_(scene), seed_(seed) {
+Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uint32_t pilotLevel)
+    : context_(context), camera_(scene.camera), integrator_(scene.integrator), seed_(seed) {
     auto start = Clock::now();
     if (scene.integrator.debias.estimator != DebiasEstimator::None && scene.integrator.debias.pmf.type == PmfType::Auto)
         throw std::logic_error("the auto pmf must be resolved by a pilot (resolveAutoPmf) before rendering");
     gpuScene_ = buildGpuScene(scene);
-    plan_ = makeRenderPlan(scene, gpuScene_.features);
+    plan_ = makeRenderPlan(scene, gpuScene_.features, pilotLevel);
     stats_.sceneSeconds = secondsSince(start);
     auto phase = Clock::now();
 
@@ -90,11 +90,12 @@ void Renderer::restartAtPilotLevel(uint32_t level) {
 }
 
 bool Renderer::restartWithCamera(const Camera& camera) {
-    const Camera& cam = scene_.camera;
+    const Camera& cam = camera_;
     if (camera.width != cam.width || camera.height != cam.height || camera.fovDegrees != cam.fovDegrees ||
         camera.medium != cam.medium || camera.filter != cam.filter)
         throw std::invalid_argument("Renderer::restartWithCamera: only the position and orientation may change");
     if (!passes_->setCamera(camera)) return false;
+    camera_ = camera;
     accum_.fill(0);
     sampleIndex_ = 0;
     const double setup = stats_.setupSeconds;
@@ -104,7 +105,7 @@ bool Renderer::restartWithCamera(const Camera& camera) {
 }
 
 void Renderer::render(const RenderRequest& request) {
-    const Camera& cam = scene_.camera;
+    const Camera& cam = camera_;
     const uint32_t perUnit = passes_->samplesPerUnit();
     const double pixels = double(cam.width) * cam.height;
 
@@ -169,7 +170,7 @@ void Renderer::render(const RenderRequest& request) {
 }
 
 void Renderer::resume(const Film& film) {
-    const Camera& cam = scene_.camera;
+    const Camera& cam = camera_;
     if (sampleIndex_ != 0) throw std::logic_error("Renderer::resume after samples were rendered");
     if (film.width() != cam.width || film.height() != cam.height)
         throw std::invalid_argument(fmt::format("cannot resume a {}x{} render from a {}x{} film", cam.width,
@@ -192,11 +193,11 @@ void Renderer::resume(const Film& film) {
 }
 
 Film Renderer::film() const {
-    const Camera& cam = scene_.camera;
+    const Camera& cam = camera_;
     Film film(cam.width, cam.height);
     film.setSamplesPerPixel(sampleIndex_);
-    const DebiasSettings& d = scene_.integrator.debias;
-    film.setPerPixelCounts(usesPhotons(scene_.integrator) && d.estimator != DebiasEstimator::None &&
+    const DebiasSettings& d = integrator_.debias;
+    film.setPerPixelCounts(usesPhotons(integrator_) && d.estimator != DebiasEstimator::None &&
                            d.schedule == LevelSchedule::PerPixel);
     std::vector<glm::vec4> raw(film.pixelCount() * shader::kChannelCount * 2);
     accum_.download(raw.data(), raw.size() * sizeof(glm::vec4));

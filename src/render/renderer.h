@@ -4,7 +4,8 @@
 // hash_grid_build and gather); the Renderer batches their units into submits, times every
 // dispatch by name and stops at a sample count or a time limit.
 //
-// A Renderer owns the scene buffers, the accumulation buffer and the pipelines. render() may be
+// A Renderer owns the scene buffers, the accumulation buffer, the pipelines and the camera and
+// integrator settings: the Scene it was made from need not outlive it. render() may be
 // called repeatedly: samples continue from where the last call stopped (their random numbers
 // depend only on pixel, global sample index and seed), so a render can be extended, and renders
 // with different seeds can be merged.
@@ -67,7 +68,8 @@ struct RenderStats {
 
 class Renderer {
 public:
-    Renderer(gpu::Context& context, const Scene& scene, uint32_t seed);
+    // pilotLevel: the pmf pilot's first fixed level (render_plan.h); kNoPilotLevel for a render.
+    Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uint32_t pilotLevel = kNoPilotLevel);
     ~Renderer();
 
     const RenderPlan& plan() const { return plan_; }
@@ -77,7 +79,7 @@ public:
     // first render() call.
     void resume(const Film& film);
     Film film() const;  // downloads the accumulation
-    // The pmf pilot only (a scene with integrator.pilotLevel set): starts again from an empty
+    // The pmf pilot only (a Renderer made with a pilot level): starts again from an empty
     // film at another fixed level, with the same pipelines and the same random numbers (sample
     // indices restart at 0). Stats restart too, except the setup time.
     void restartAtPilotLevel(uint32_t level);
@@ -94,7 +96,10 @@ public:
 
 private:
     gpu::Context& context_;
-    const Scene& scene_;
+    // What a render reads of the scene after construction, owned (the scene buffers hold the
+    // rest): a Renderer may outlive the Scene it was made from.
+    Camera camera_;
+    IntegratorSettings integrator_;
     uint32_t seed_;
     GpuScene gpuScene_;
     RenderPlan plan_;

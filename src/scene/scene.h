@@ -116,7 +116,7 @@ struct Camera {
 };
 
 // Settings of the debiasing telescope (docs/ESTIMATORS.md sections 1-2).
-// Auto: chosen by a pilot render before the render proper (src/study/pmf_pilot.h); the shaders
+// Auto: chosen by a pilot render before the render proper (src/render/pmf_pilot.h); the shaders
 // only ever see Geometric or PowerLaw.
 enum class PmfType : uint32_t { Geometric = shader::kPmfGeometric, PowerLaw = shader::kPmfPowerLaw, Auto = 0x7fffffff /* host only */ };
 enum class DebiasEstimator : uint32_t { None = shader::kDebiasNone, SingleTerm = shader::kDebiasSingleTerm, Sum = shader::kDebiasSum };
@@ -134,8 +134,6 @@ struct PmfSettings {
 // section 1, "Defaults"). The photon default is set where photon mapping reads its block.
 PmfSettings defaultPathDepthPmf();
 PmfSettings defaultTransmittancePmf();
-
-constexpr uint32_t kNoPilotLevel = 0xffffffffu;
 
 // How per-sample levels are laid out on the device's lanes (shared/gpu_types.h kLevelSchedule*).
 enum class LevelSchedule : uint32_t {
@@ -191,9 +189,6 @@ struct IntegratorSettings {
     PhotonSettings photon;  // photon_map and progressive_photon_map only
     // "transmittance_estimator": how every transmittance factor of a path is estimated.
     TransmittanceEstimatorSettings transmittance;
-    // Set by the pmf pilot only (not a scene key): every sample takes this level and records the
-    // unweighted correction D_j instead of its estimate, with no base.
-    uint32_t pilotLevel = kNoPilotLevel;
 };
 
 inline bool usesPhotons(const IntegratorSettings& s) { return s.type != IntegratorType::PathTracer; }

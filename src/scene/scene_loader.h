@@ -5,19 +5,9 @@
 #include <vector>
 
 #include "scene/scene.h"
+#include "scene/scene_overrides.h"
 
 namespace telescope {
-
-// One "--set key.path=value" override, applied to the JSON before it is interpreted.
-// key uses dots and [i] indices ("camera.resolution", "primitives[2].bsdf"); value is JSON
-// text, or a bare string when it does not parse as JSON.
-struct SceneOverride {
-    std::string key;
-    std::string value;
-};
-
-// Parses "key=value". Throws InputError naming the command line.
-SceneOverride parseOverride(const std::string& text);
 
 // Loads and validates a scene. Throws InputError (file + JSON key path + reason) on any bad
 // input: malformed JSON, unknown or unsupported type, wrong value type or range, missing file.

@@ -404,6 +404,56 @@ TEST(SceneLoader, PhotonMapSettings) {
 
 // ---- Overrides ----
 
+// Tungsten's transmittance models: the shader's model type (shared/transmittance.h) and each
+// parameter's default, by name; given parameters replace the defaults.
+TEST(SceneLoader, TransmittanceModelsByNameWithTungstenDefaults) {
+    struct Expected {
+        const char* json;
+        uint32_t type;
+        glm::vec4 params;
+    };
+    const Expected cases[] = {
+        {R"({"type": "exponential"})", 0, {0, 0, 0, 0}},
+        {R"({"type": "linear"})", 1, {1, 0, 0, 0}},
+        {R"({"type": "quadratic"})", 2, {0.75f, 0, 0, 0}},
+        {R"({"type": "double_exponential"})", 3, {0.5f, 10, 0, 0}},
+        {R"({"type": "erlang"})", 4, {5, 0, 0, 0}},
+        {R"({"type": "davis"})", 5, {1.1f, 0, 0, 0}},
+        {R"({"type": "davis_weinstein"})", 6, {0.75f, 1, 0, 0}},
+        {R"({"type": "pulse"})", 7, {0, 1, 4, 0}},
+        {R"({"type": "pulse", "min": 0.5, "max": 2, "num_pulses": 7})", 7, {0.5f, 2, 7, 0}},
+        {R"({"type": "davis_weinstein", "h": 0.6, "c": 3})", 6, {0.6f, 3, 0, 0}},
+        {R"({"type": "double_exponential", "sigma_b": 4})", 3, {0.5f, 4, 0, 0}},
+    };
+    for (const Expected& e : cases) {
+        const Scene s = load(std::string(R"({"media": [{"type": "homogeneous", "transmittance": )") + e.json + "}]}");
+        const TransmittanceModel& t = s.media.at(0).transmittance;
+        EXPECT_EQ(t.type, e.type) << e.json;
+        EXPECT_EQ(t.params, e.params) << e.json;
+        EXPECT_EQ(t.typeA, e.type) << e.json;
+        EXPECT_EQ(t.typeB, e.type) << e.json;
+        EXPECT_EQ(t.paramsB, e.params) << e.json;
+    }
+    // Interpolated: linear (max_t 1) and erlang (rate 5) by default, mixed half and half.
+    Scene s = load(R"({"media": [{"type": "homogeneous", "transmittance": {"type": "interpolated"}}]})");
+    TransmittanceModel t = s.media.at(0).transmittance;
+    EXPECT_EQ(t.type, 8u);
+    EXPECT_EQ(t.typeA, 1u);
+    EXPECT_EQ(t.params, glm::vec4(1, 0, 0, 0));
+    EXPECT_EQ(t.typeB, 4u);
+    EXPECT_EQ(t.paramsB, glm::vec4(5, 0, 0, 0));
+    EXPECT_EQ(t.ratio, 0.5f);
+    s = load(R"({"media": [{"type": "homogeneous", "transmittance": {"type": "interpolated", "ratio": 0.25,
+                "tr_a": {"type": "davis", "alpha": 2}, "tr_b": {"type": "quadratic"}}}]})");
+    t = s.media.at(0).transmittance;
+    EXPECT_EQ(t.typeA, 5u);
+    EXPECT_EQ(t.params, glm::vec4(2, 0, 0, 0));
+    EXPECT_EQ(t.typeB, 2u);
+    EXPECT_EQ(t.paramsB, glm::vec4(0.75f, 0, 0, 0));
+    EXPECT_EQ(t.ratio, 0.25f);
+    EXPECT_EQ(t.name, "interpolated");
+}
+
 TEST(SceneOverrides, ParseSplitsAtTheFirstEquals) {
     const SceneOverride o = parseOverride("renderer.output_file=a=b.png");
     EXPECT_EQ(o.key, "renderer.output_file");

@@ -1,9 +1,80 @@
 #include "scene/settings_json.h"
 
+#include <filesystem>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "scene/scene_loader.h"
+
 namespace telescope {
 
 using nlohmann::json;
 
+namespace {
+
+// ---- Names of the settings' enums, as the scene file spells them ----
+template <class E>
+struct Named {
+    E value;
+    const char* name;
+};
+
+constexpr Named<PmfType> kPmfTypes[] = {
+    {PmfType::Geometric, "geometric"}, {PmfType::PowerLaw, "power_law"}, {PmfType::Auto, "auto"}};
+constexpr Named<DebiasEstimator> kDebiasEstimators[] = {
+    {DebiasEstimator::SingleTerm, "single_term"}, {DebiasEstimator::Sum, "sum"}};
+constexpr Named<LevelSchedule> kLevelSchedules[] = {
+    {LevelSchedule::PerPixel, "per_pixel"}, {LevelSchedule::Uniform, "uniform"}, {LevelSchedule::Queued, "queued"}};
+constexpr Named<IntegratorType> kIntegratorTypes[] = {{IntegratorType::PathTracer, "path_tracer"},
+                                                      {IntegratorType::PhotonMap, "photon_map"},
+                                                      {IntegratorType::ProgressivePhotonMap, "progressive_photon_map"}};
+constexpr Named<PhotonKernel> kPhotonKernels[] = {
+    {PhotonKernel::Cone, "cone"}, {PhotonKernel::Uniform, "uniform"}, {PhotonKernel::Epanechnikov, "epanechnikov"}};
+constexpr Named<DirectLighting> kDirectLighting[] = {
+    {DirectLighting::Photons, "photons"}, {DirectLighting::NextEvent, "next_event"}};
+
+template <class E, size_t N>
+const char* nameOf(const Named<E> (&table)[N], E value) {
+    for (const Named<E>& n : table)
+        if (n.value == value) return n.name;
+    throw std::logic_error("a settings value without a name");
+}
+
+// Reads j[key] (when present) as one of the table's names.
+template <class E, size_t N>
+void readName(const json& j, const char* key, const Named<E> (&table)[N], E& value) {
+    if (!j.contains(key)) return;
+    const std::string name = j.at(key).get<std::string>();
+    for (const Named<E>& n : table)
+        if (name == n.name) {
+            value = n.value;
+            return;
+        }
+    throw std::invalid_argument(fmt::format("'{}': unknown value '{}'", key, name));
+}
+
+template <class T>
+void readValue(const json& j, const char* key, T& value) {
+    if (j.contains(key)) value = j.at(key).get<T>();
+}
+
+}  // namespace
+
+const char* transmittanceEstimatorName(TransmittanceEstimatorType t) {
+    switch (t) {
+        case TransmittanceEstimatorType::RayMarch: return "ray_march";
+        case TransmittanceEstimatorType::DebiasedRayMarch: return "debiased_ray_march";
+        case TransmittanceEstimatorType::DeltaTracking: return "delta_tracking";
+        case TransmittanceEstimatorType::RatioTracking: return "ratio_tracking";
+        case TransmittanceEstimatorType::ResidualRatioTracking: return "residual_ratio_tracking";
+        case TransmittanceEstimatorType::UnbiasedRayMarch: return "unbiased_ray_march";
+    }
+    return "?";
+}
+
+// ---- Pmf ----
 void to_json(json& j, const PmfSettings& p) {
     switch (p.type) {
     case PmfType::Geometric: j = {{"type", "geometric"}, {"r", p.r}}; break;
@@ -13,36 +84,81 @@ void to_json(json& j, const PmfSettings& p) {
     j["origin"] = p.origin;
 }
 
+void from_json(const json& j, PmfSettings& p) {
+    readName(j, "type", kPmfTypes, p.type);
+    readValue(j, "r", p.r);
+    readValue(j, "alpha", p.alpha);
+    readValue(j, "pilot_spp", p.pilotSpp);
+    readValue(j, "pilot_levels", p.pilotLevels);
+    readValue(j, "origin", p.origin);
+}
+
+// ---- Debiasing (photon mapping's block parameters included) ----
 void to_json(json& j, const DebiasSettings& d) {
     if (d.estimator == DebiasEstimator::None) {
         j = nullptr;
         return;
     }
-    j = {{"estimator", d.estimator == DebiasEstimator::SingleTerm ? "single_term" : "sum"}, {"pmf", d.pmf}};
-    j["level_schedule"] = d.schedule == LevelSchedule::PerPixel ? "per_pixel"
-                          : d.schedule == LevelSchedule::Uniform ? "uniform"
-                                                                 : "queued";
+    j = {{"estimator", nameOf(kDebiasEstimators, d.estimator)}, {"pmf", d.pmf}};
+    j["level_schedule"] = nameOf(kLevelSchedules, d.schedule);
     if (d.testPmfWeight != 1.0f) j["test_pmf_weight"] = d.testPmfWeight;
 }
 
+void from_json(const json& j, DebiasSettings& d) {
+    if (j.is_null()) {
+        d.estimator = DebiasEstimator::None;
+        return;
+    }
+    readName(j, "estimator", kDebiasEstimators, d.estimator);
+    if (j.contains("pmf")) from_json(j.at("pmf"), d.pmf);
+    readName(j, "level_schedule", kLevelSchedules, d.schedule);
+    d.testPmfWeight = j.value("test_pmf_weight", 1.0f);  // written only when it is not 1
+    readValue(j, "area_ratio", d.photon.areaRatio);
+    readValue(j, "photon_growth", d.photon.photonGrowth);
+    readValue(j, "level_cap", d.photon.levelCap);
+}
+
+// ---- Transmittance estimator ----
 void to_json(json& j, const TransmittanceEstimatorSettings& t) {
     j = {{"type", transmittanceEstimatorName(t.type)}, {"level", t.level}};
     if (t.type == TransmittanceEstimatorType::DebiasedRayMarch) j["pmf"] = t.pmf;
 }
 
+void from_json(const json& j, TransmittanceEstimatorSettings& t) {
+    if (j.contains("type")) {
+        const std::string name = j.at("type").get<std::string>();
+        bool found = false;
+        for (uint32_t i = 0; i <= uint32_t(TransmittanceEstimatorType::UnbiasedRayMarch); ++i)
+            if (name == transmittanceEstimatorName(TransmittanceEstimatorType(i))) {
+                t.type = TransmittanceEstimatorType(i);
+                found = true;
+            }
+        if (!found) throw std::invalid_argument(fmt::format("'type': unknown transmittance estimator '{}'", name));
+    }
+    readValue(j, "level", t.level);
+    if (j.contains("pmf")) from_json(j.at("pmf"), t.pmf);
+}
+
+// ---- Photon mapping ----
 void to_json(json& j, const PhotonSettings& p) {
-    const char* kernels[] = {"cone", "uniform", "epanechnikov"};
     j = {{"photon_count", p.photonCount},
          {"gather_radius", p.gatherRadius},
          {"alpha", p.alpha},
-         {"kernel", kernels[uint32_t(p.kernel)]},
-         {"direct_lighting", p.directLighting == DirectLighting::Photons ? "photons" : "next_event"}};
+         {"kernel", nameOf(kPhotonKernels, p.kernel)},
+         {"direct_lighting", nameOf(kDirectLighting, p.directLighting)}};
 }
 
-json resolvedSettings(const Scene& scene) {
-    const IntegratorSettings& in = scene.integrator;
-    const char* types[] = {"path_tracer", "photon_map", "progressive_photon_map"};
-    json integrator = {{"type", types[uint32_t(in.type)]},
+void from_json(const json& j, PhotonSettings& p) {
+    readValue(j, "photon_count", p.photonCount);
+    readValue(j, "gather_radius", p.gatherRadius);
+    readValue(j, "alpha", p.alpha);
+    readName(j, "kernel", kPhotonKernels, p.kernel);
+    readName(j, "direct_lighting", kDirectLighting, p.directLighting);
+}
+
+// ---- Integrator ----
+json integratorJson(const IntegratorSettings& in, bool withTransmittance) {
+    json integrator = {{"type", nameOf(kIntegratorTypes, in.type)},
                        {"min_bounces", in.minBounces},
                        {"max_bounces", in.maxBounces},
                        {"enable_light_sampling", in.enableLightSampling},
@@ -56,11 +172,58 @@ json resolvedSettings(const Scene& scene) {
             integrator["debias"]["level_cap"] = in.debias.photon.levelCap;
         }
     }
-    if (!scene.media.empty()) integrator["transmittance_estimator"] = in.transmittance;
-    return {{"integrator", integrator},
+    if (withTransmittance) integrator["transmittance_estimator"] = in.transmittance;
+    return integrator;
+}
+
+void from_json(const json& j, IntegratorSettings& s) {
+    readName(j, "type", kIntegratorTypes, s.type);
+    readValue(j, "min_bounces", s.minBounces);
+    readValue(j, "max_bounces", s.maxBounces);
+    readValue(j, "enable_light_sampling", s.enableLightSampling);
+    readValue(j, "enable_two_sided_shading", s.enableTwoSidedShading);
+    if (j.contains("debias")) from_json(j.at("debias"), s.debias);
+    from_json(j, s.photon);
+    if (j.contains("transmittance_estimator")) from_json(j.at("transmittance_estimator"), s.transmittance);
+}
+
+// ---- A render's settings ----
+json resolvedSettings(const Scene& scene) {
+    return {{"integrator", integratorJson(scene.integrator, !scene.media.empty())},
             {"camera", {{"resolution", {scene.camera.width, scene.camera.height}},
                         {"fov", scene.camera.fovDegrees},
                         {"reconstruction_filter", scene.camera.filter}}}};
+}
+
+void applySettings(Scene& scene, const json& settings, const std::string& source) {
+    const char* key = "";
+    try {
+        if (!settings.is_object()) throw std::invalid_argument("expected an object, got " + settings.dump());
+        if (settings.contains("integrator")) {
+            key = "integrator";
+            from_json(settings.at("integrator"), scene.integrator);
+        }
+        if (settings.contains("camera")) {
+            key = "camera";
+            const json& c = settings.at("camera");
+            if (c.contains("resolution")) {
+                scene.camera.width = c.at("resolution").at(0).get<uint32_t>();
+                scene.camera.height = c.at("resolution").at(1).get<uint32_t>();
+            }
+            readValue(c, "fov", scene.camera.fovDegrees);
+            readValue(c, "reconstruction_filter", scene.camera.filter);
+        }
+    } catch (const std::exception& e) {
+        throw InputError(source, key, fmt::format("bad settings: {}", e.what()));
+    }
+}
+
+Scene reproduceScene(const std::string& sceneDocument, const std::string& sceneFile, const std::string& settings) {
+    Scene scene = loadSceneFromString(sceneDocument, sceneFile, std::filesystem::path(sceneFile).parent_path().string());
+    const json parsed = json::parse(settings, nullptr, /*allow_exceptions=*/false);
+    if (parsed.is_discarded()) throw InputError(sceneFile, "settings", "the settings are not valid JSON");
+    applySettings(scene, parsed, sceneFile);
+    return scene;
 }
 
 }  // namespace telescope

@@ -15,7 +15,8 @@
 #include "render/image_output.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
-#include "study/pmf_pilot.h"
+#include "scene/settings_json.h"
+#include "render/pmf_pilot.h"
 #include "study/study_files.h"
 
 namespace fs = std::filesystem;
@@ -181,6 +182,7 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
                                                     c.type == PmfType::Geometric ? fmt::format("r = {:.2f}", c.r)
                                                                                  : fmt::format("alpha = {:.2f}", c.alpha));
             }
+            summary.settings.push_back(resolvedSettings(scene));
             Renderer renderer(context, scene, seed);
             if (si == 0) summary.estimator = renderer.plan().estimator;
             summary.pilotGpuSeconds += pilot.pilotGpuSeconds / o.seedCount;
@@ -358,6 +360,14 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
           "crop of the reference and of each method's final image, left to right in the order above.\n";
     writeTextAtomically(out("report.md"), md);
     report.files.push_back(out("report.md"));
+
+    // ---- The settings each method's runs rendered with (an auto pmf resolved per seed) ----
+    nlohmann::json settings = {{"scene", o.scenePath}, {"first_seed", o.seed}, {"methods", nlohmann::json::array()}};
+    for (const auto& m : report.methods)
+        settings["methods"].push_back({{"label", m.method.label}, {"description", m.method.description},
+                                       {"estimator", m.estimator}, {"settings_per_seed", m.settings}});
+    writeTextAtomically(out("settings.json"), settings.dump(2) + "\n");
+    report.files.push_back(out("settings.json"));
     return report;
 }
 

@@ -4,14 +4,17 @@
 // Output, in one directory: convergence.csv (one row per method and slice: samples, wall and
 // GPU seconds, RMSE, relative MSE, mean signed error), convergence.png (gnuplot: relative MSE
 // and |bias| against GPU time, log-log, with fitted slopes), strip.png (the same crop of the
-// reference and of every method's final image: an equal-time strip when slices are timed) and
-// report.md (a table of the above and how to read it).
+// reference and of every method's final image: an equal-time strip when slices are timed),
+// report.md (a table of the above and how to read it) and settings.json (the resolved settings of
+// every method's runs).
 #pragma once
 
 #include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "gpu/context.h"
 #include "study/error_metrics.h"
@@ -62,6 +65,7 @@ struct MethodSummary {
     double pilotWallSeconds = 0.0;  // (means over the seeds)
     std::string pilotChoices;       // pmf "auto": the pmf each seed's pilot chose
     std::vector<double> seedWorkTimesMse;  // GPU seconds x relative MSE at the end, per seed
+    std::vector<nlohmann::json> settings;  // resolvedSettings per seed (an auto pmf resolved)
 };
 
 struct ConvergeReport {

@@ -1,17 +1,16 @@
-// Which overrides make a scene's integrator unbiased, for `telescope reference`.
+// What makes a scene's integrator unbiased, for `telescope reference`: a typed patch on its
+// settings (the scene document stays as given; the outputs record the patched settings).
 #pragma once
 
 #include <string>
-#include <vector>
 
 #include "scene/scene.h"
-#include "scene/scene_loader.h"
 
 namespace telescope {
 
 struct UnbiasedSetup {
-    std::vector<SceneOverride> overrides;  // empty when the scene's integrator is unbiased as given
-    std::string why;                       // one line for the log
+    IntegratorSettings integrator;  // the scene's, patched (unchanged when unbiased as given)
+    std::string why;                // one line for the log
 };
 
 // The path tracer gets the Russian-roulette sum estimator over path depth at its own max_bounces

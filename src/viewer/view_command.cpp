@@ -22,7 +22,7 @@
 #include "scene/settings_json.h"
 #include "scene/scene_loader.h"
 #include "shared/view_types.h"
-#include "study/pmf_pilot.h"
+#include "render/pmf_pilot.h"
 #include "viewer/orbit_camera.h"
 #include "viewer/presenter.h"
 #include "viewer/screenshot.h"

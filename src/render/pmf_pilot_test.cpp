@@ -1,7 +1,7 @@
 // pmf "auto": the variance and cost prediction against closed forms, the fit of the pilot's
 // measurements, and the recipe's robustness to the pilot's own noise (simulated pilots whose
 // deep levels see few, large corrections).
-#include "study/pmf_pilot.h"
+#include "render/pmf_pilot.h"
 
 #include <gtest/gtest.h>
 

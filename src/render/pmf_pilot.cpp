@@ -1,4 +1,4 @@
-#include "study/pmf_pilot.h"
+#include "render/pmf_pilot.h"
 
 #include <algorithm>
 #include <cmath>
@@ -227,8 +227,7 @@ PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t
     s.integrator.debias.estimator = DebiasEstimator::SingleTerm;
     s.integrator.debias.pmf = PmfSettings{};
     s.integrator.debias.schedule = LevelSchedule::PerPixel;
-    s.integrator.pilotLevel = 0;
-    Renderer r(context, s, seed + 7919u);
+    Renderer r(context, s, seed + 7919u, /*pilotLevel=*/0);
     std::vector<glm::dvec3> weight;
     double pixels = 0.0;
     for (uint32_t m = 0; m < settings.pilotLevels; ++m) {

@@ -1,0 +1,280 @@
+// "media" and every medium reference (docs/MEDIA.md): homogeneous, exponential and voxel media,
+// their phase functions, Tungsten's transmittance models and the density grids. A new medium is
+// read here (and added to MediumType, scene.h).
+#include "scene/scene_reader.h"
+
+#include <array>
+
+#include "scene/density_grid.h"
+#include "scene/transform.h"
+#include "shared/transmittance.h"
+
+namespace telescope::scene_reader {
+
+namespace {
+
+// ---- Tungsten's transmittance models: names, shader types (shared/transmittance.h), parameters ----
+struct TransmittanceParam {
+    const char* key = nullptr;  // Tungsten's name; params[i] of the model
+    float fallback = 0.0f;
+    bool positive = false;
+};
+
+struct TransmittanceModelSpec {
+    const char* name;
+    uint32_t type;
+    std::array<TransmittanceParam, 3> params;
+};
+
+// "interpolated" mixes two of these (not another interpolated one).
+const TransmittanceModelSpec kTransmittanceModels[] = {
+    {"exponential", shader::kTrExponential, {}},
+    {"linear", shader::kTrLinear, {{{"max_t", 1.0f, true}}}},
+    {"quadratic", shader::kTrQuadratic, {{{"max_t", 0.75f, true}}}},
+    {"double_exponential", shader::kTrDoubleExponential, {{{"sigma_a", 0.5f, true}, {"sigma_b", 10.0f, true}}}},
+    {"erlang", shader::kTrErlang, {{{"rate", 5.0f, true}}}},
+    {"davis", shader::kTrDavis, {{{"alpha", 1.1f, true}}}},
+    {"davis_weinstein", shader::kTrDavisWeinstein, {{{"h", 0.75f, true}, {"c", 1.0f, true}}}},
+    // params.z: "num_pulses", an integer (4 by default)
+    {"pulse", shader::kTrPulse, {{{"min", 0.0f, false}, {"max", 1.0f, false}, {nullptr, 4.0f, false}}}},
+};
+
+const TransmittanceModelSpec* findTransmittanceModel(const std::string& name) {
+    for (const TransmittanceModelSpec& s : kTransmittanceModels)
+        if (name == s.name) return &s;
+    return nullptr;
+}
+
+// A model with every parameter at its default.
+TransmittanceModel defaultTransmittanceModel(const std::string& name) {
+    const TransmittanceModelSpec& spec = *findTransmittanceModel(name);
+    TransmittanceModel t;
+    t.name = spec.name;
+    t.type = spec.type;
+    for (size_t i = 0; i < spec.params.size(); ++i) t.params[int(i)] = spec.params[i].fallback;
+    t.typeA = t.typeB = t.type;
+    t.paramsB = t.params;
+    return t;
+}
+
+}  // namespace
+
+void SceneReader::readMedia(const json& list) {
+    for (size_t i = 0; i < list.size(); ++i) {
+        const std::string key = element("media", i);
+        Medium m = readMedium(list[i], key);
+        if (!m.name.empty()) mediumByName_.emplace(m.name, int32_t(scene_.media.size()));
+        scene_.media.push_back(std::move(m));
+    }
+}
+
+// A medium reference: a name from the media list or an inline medium object.
+int32_t SceneReader::mediumRef(const json& ref, const std::string& key) {
+    if (ref.is_string()) {
+        const auto it = mediumByName_.find(ref.get<std::string>());
+        if (it == mediumByName_.end()) fail(key, fmt::format("unknown medium '{}'", ref.get<std::string>()));
+        return it->second;
+    }
+    if (ref.is_object()) {
+        scene_.media.push_back(readMedium(ref, key));
+        return int32_t(scene_.media.size() - 1);
+    }
+    fail(key, "expected a medium name or an inline medium object, got " + quote(ref));
+}
+
+Medium SceneReader::readMedium(const json& v, const std::string& key) {
+    const std::string type = requiredType(v, key);
+    const std::string typeKey = member(key, "type");
+    Medium m;
+    if (type == "homogeneous") m.type = MediumType::Homogeneous;
+    else if (type == "exponential") m.type = MediumType::Exponential;
+    else if (type == "voxel") m.type = MediumType::Grid;
+    else if (type == "atmosphere") fail(typeKey, "unsupported medium type 'atmosphere'");
+    else fail(typeKey, fmt::format("unknown medium type '{}' (expected \"homogeneous\", \"exponential\" or \"voxel\")", type));
+
+    if (const json* name = find(v, "name")) m.name = string(*name, member(key, "name"));
+    auto nonNegative = [&](const char* field, glm::vec3 fallback) {
+        const json* f = find(v, field);
+        if (!f) return fallback;
+        glm::vec3 c = vec3(*f, member(key, field));
+        if (c.x < 0.0f || c.y < 0.0f || c.z < 0.0f) fail(member(key, field), "must be non-negative");
+        return c;
+    };
+    m.sigmaA = nonNegative("sigma_a", glm::vec3(0.0f));
+    m.sigmaS = nonNegative("sigma_s", glm::vec3(0.0f));
+    if (const json* d = find(v, "density")) {
+        m.density = number(*d, member(key, "density"));
+        if (m.density < 0.0f) fail(member(key, "density"), "must be non-negative");
+    }
+    std::vector<std::string_view> read = {"name", "type", "sigma_a", "sigma_s", "density", "phase_function", "transmittance",
+                                          "max_bounces"};
+    if (find(v, "max_bounces")) ignore(member(key, "max_bounces"));
+
+    if (m.type == MediumType::Exponential) {
+        if (const json* f = find(v, "falloff_scale")) {
+            m.falloffScale = number(*f, member(key, "falloff_scale"));
+            if (m.falloffScale < 0.0f) fail(member(key, "falloff_scale"), "must be non-negative");
+        }
+        if (const json* f = find(v, "unit_point")) m.unitPoint = vec3(*f, member(key, "unit_point"));
+        if (const json* f = find(v, "falloff_direction")) {
+            glm::vec3 d = vec3(*f, member(key, "falloff_direction"));
+            if (isDegenerate(d)) fail(member(key, "falloff_direction"), "the direction has zero length");
+            m.falloffDirection = glm::normalize(d);
+        }
+        read.insert(read.end(), {"falloff_scale", "unit_point", "falloff_direction"});
+    }
+    if (m.type == MediumType::Grid) {
+        const json* grid = find(v, "grid");
+        if (!grid) fail(key, "missing 'grid' (a voxel medium needs a grid)");
+        m.grid = readGrid(*grid, member(key, "grid"));
+        read.push_back("grid");
+    }
+
+    if (const json* phase = find(v, "phase_function")) {
+        const std::string pk = member(key, "phase_function");
+        expectObject(*phase, pk);
+        const std::string ptype = typeOr(*phase, pk, "isotropic");
+        if (ptype == "isotropic") {
+            m.phase = PhaseFunction::Isotropic;
+            ignoreUnread(*phase, pk, {"type"});
+        } else if (ptype == "henyey_greenstein") {
+            m.phase = PhaseFunction::HenyeyGreenstein;
+            if (const json* g = find(*phase, "g")) m.phaseG = number(*g, member(pk, "g"));
+            if (!(m.phaseG > -1.0f && m.phaseG < 1.0f)) fail(member(pk, "g"), "must be in (-1, 1)");
+            ignoreUnread(*phase, pk, {"type", "g"});
+        } else if (ptype == "rayleigh") {
+            fail(member(pk, "type"), "unsupported phase function 'rayleigh'");
+        } else {
+            fail(member(pk, "type"), fmt::format("unknown phase function '{}'", ptype));
+        }
+    }
+    if (const json* t = find(v, "transmittance")) m.transmittance = readTransmittance(*t, member(key, "transmittance"), false);
+    ignoreUnread(v, key, read);
+    return m;
+}
+
+// Tungsten's transmittance models with its parameter names and defaults.
+TransmittanceModel SceneReader::readTransmittance(const json& v, const std::string& key, bool nested) {
+    expectObject(v, key);
+    const std::string type = typeOr(v, key, "exponential");
+    if (type == "interpolated") {
+        if (nested) fail(member(key, "type"), "an interpolated transmittance cannot nest another interpolated one");
+        const TransmittanceModel a = find(v, "tr_a") ? readTransmittance(v["tr_a"], member(key, "tr_a"), true)
+                                                     : defaultTransmittanceModel("linear");
+        const TransmittanceModel b = find(v, "tr_b") ? readTransmittance(v["tr_b"], member(key, "tr_b"), true)
+                                                     : defaultTransmittanceModel("erlang");
+        TransmittanceModel t;
+        t.name = type;
+        t.type = shader::kTrInterpolated;
+        t.typeA = a.type;
+        t.params = a.params;
+        t.typeB = b.type;
+        t.paramsB = b.params;
+        t.ratio = find(v, "ratio") ? number(v["ratio"], member(key, "ratio")) : 0.5f;
+        if (t.ratio < 0.0f || t.ratio > 1.0f) fail(member(key, "ratio"), "must be in [0, 1]");
+        ignoreUnread(v, key, {"type", "tr_a", "tr_b", "ratio"});
+        return t;
+    }
+    const TransmittanceModelSpec* spec = findTransmittanceModel(type);
+    if (!spec) fail(member(key, "type"), fmt::format("unknown transmittance type '{}'", type));
+
+    TransmittanceModel t = defaultTransmittanceModel(type);
+    std::vector<std::string_view> read = {"type"};
+    for (size_t i = 0; i < spec->params.size() && spec->params[i].key; ++i) {
+        const TransmittanceParam& p = spec->params[i];
+        read.push_back(p.key);
+        const json* f = find(v, p.key);
+        if (!f) continue;
+        t.params[int(i)] = number(*f, member(key, p.key));
+        if (p.positive && !(t.params[int(i)] > 0.0f)) fail(member(key, p.key), "must be positive");
+    }
+    if (t.type == shader::kTrDavisWeinstein && (t.params.x < 0.5f || t.params.x > 1.0f))
+        fail(member(key, "h"), "must be in [0.5, 1]");
+    if (t.type == shader::kTrPulse) {
+        if (!(t.params.y > t.params.x)) fail(member(key, "max"), "must be larger than min");
+        if (const json* n = find(v, "num_pulses")) t.params.z = float(integer(*n, member(key, "num_pulses"), 1, 1024));
+        read.push_back("num_pulses");
+    }
+    ignoreUnread(v, key, read);
+    t.typeA = t.typeB = t.type;
+    t.paramsB = t.params;
+    return t;
+}
+
+// A grid: {"type": "procedural_cloud" | "constant", "resolution", "transform", ...}. OpenVDB files
+// ("vdb") need libopenvdb, which this build does not use.
+DensityGrid SceneReader::readGrid(const json& v, const std::string& key) {
+    expectObject(v, key);
+    const std::string type = typeOr(v, key, "");
+    if (type == "vdb")
+        fail(member(key, "type"), "OpenVDB grids are not supported by this build of Telescope (no libopenvdb); "
+                                  "use a \"procedural_cloud\" or \"constant\" grid");
+    if (type != "procedural_cloud" && type != "constant" && type != "linear")
+        fail(member(key, "type"),
+             fmt::format("unknown grid type '{}' (expected \"procedural_cloud\", \"constant\" or \"linear\")", type));
+    glm::uvec3 res(32);
+    if (const json* r = find(v, "resolution")) {
+        const std::string rk = member(key, "resolution");
+        if (r->is_array()) {
+            if (r->size() != 3) fail(rk, fmt::format("expected [x, y, z], got {} elements", r->size()));
+            for (int i = 0; i < 3; ++i) res[i] = integer((*r)[i], element(rk, i), 1, 512);
+        } else {
+            res = glm::uvec3(integer(*r, rk, 1, 512));
+        }
+    }
+    DensityGrid g;
+    if (type == "linear") {
+        auto value = [&](const char* field) {
+            const float x = find(v, field) ? number(v[field], member(key, field)) : 1.0f;
+            if (x < 0.0f) fail(member(key, field), "must be non-negative");
+            return x;
+        };
+        g = linearGrid(res, value("from"), value("to"));
+        rejectUnknownKeys(v, key, {"type", "resolution", "transform", "from", "to"});
+    } else if (type == "constant") {
+        const float value = find(v, "value") ? number(v["value"], member(key, "value")) : 1.0f;
+        if (value < 0.0f) fail(member(key, "value"), "must be non-negative");
+        g = constantGrid(res, value);
+        rejectUnknownKeys(v, key, {"type", "resolution", "transform", "value"});
+    } else {
+        ProceduralCloudSettings c;
+        c.resolution = res;
+        if (const json* f = find(v, "seed")) c.seed = integer(*f, member(key, "seed"), 0, 0x7fffffff);
+        if (const json* f = find(v, "frequency")) c.frequency = number(*f, member(key, "frequency"));
+        if (const json* f = find(v, "coverage")) c.coverage = number(*f, member(key, "coverage"));
+        if (!(c.frequency > 0.0f)) fail(member(key, "frequency"), "must be positive");
+        g = proceduralCloud(c);
+        rejectUnknownKeys(v, key, {"type", "resolution", "transform", "seed", "frequency", "coverage"});
+    }
+    // The grid fills the unit cube [-0.5, 0.5]^3 placed by the transform (translation and scale).
+    const glm::mat4 m = find(v, "transform") ? transform(v["transform"], member(key, "transform")) : glm::mat4(1.0f);
+    const glm::vec3 half = 0.5f * columnLengths(m), centre(m[3]);
+    const glm::mat3 rot = columnDirections(m);
+    if (glm::length(glm::abs(rot[0]) - glm::vec3(1, 0, 0)) + glm::length(glm::abs(rot[1]) - glm::vec3(0, 1, 0)) > 1e-4f)
+        fail(member(key, "transform"), "grids must be axis-aligned (translation and scale only)");
+    if (!(half.x > 0.0f && half.y > 0.0f && half.z > 0.0f)) fail(member(key, "transform"), "the grid box has zero size");
+    g.boxMin = centre - half;
+    g.boxMax = centre + half;
+    return g;
+}
+
+// The trackers and unbiased ray marching estimate exp(-tau) only.
+void SceneReader::checkEstimatorFitsMedia(const json& doc) const {
+    if (usesPhotons(scene_.integrator) && !scene_.media.empty())
+        fail("media", fmt::format("the '{}' integrator does not support participating media (use path_tracer)",
+                                  scene_.integrator.type == IntegratorType::PhotonMap ? "photon_map"
+                                                                                     : "progressive_photon_map"));
+    const TransmittanceEstimatorType t = scene_.integrator.transmittance.type;
+    if (t == TransmittanceEstimatorType::RayMarch || t == TransmittanceEstimatorType::DebiasedRayMarch) return;
+    for (size_t i = 0; i < scene_.media.size(); ++i)
+        if (!scene_.media[i].transmittance.exponential()) {
+            const std::string where = scene_.media[i].name.empty() ? fmt::format("medium {}", i)
+                                                                     : fmt::format("medium '{}'", scene_.media[i].name);
+            fail(find(doc, "integrator") ? "integrator.transmittance_estimator.type" : "media",
+                 fmt::format("{} works for exponential media only, but {} has the '{}' transmittance "
+                             "(use ray_march or debiased_ray_march)",
+                             transmittanceEstimatorName(t), where, scene_.media[i].transmittance.name));
+        }
+}
+
+}  // namespace telescope::scene_reader

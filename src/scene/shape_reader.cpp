@@ -1,0 +1,172 @@
+// "primitives": Tungsten's shapes flattened into the world-space triangles, spheres and disks the
+// GPU traces (quad orientation and power -> radiance as in Tungsten), plus point and environment
+// lights. A new shape is read here.
+#include "scene/scene_reader.h"
+
+#include <cmath>
+
+#include "scene/mesh_io.h"
+#include "scene/transform.h"
+
+namespace telescope::scene_reader {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979323846f;
+
+constexpr std::string_view kUnsupportedPrimitives[] = {
+    "curves", "cylinder", "instances", "infinite_sphere_cap", "minecraft_map", "skydome", "spot"};
+
+Geometry triangle(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2, const glm::vec3& normal) {
+    Geometry g;
+    g.type = GeometryType::Triangle;
+    g.p0 = p0;
+    g.p1 = p1;
+    g.p2 = p2;
+    g.normal = normal;
+    return g;
+}
+
+// Two triangles for the parallelogram base + [0,1] e0 + [0,1] e1, wound so that
+// cross(p1 - p0, p2 - p0) points along the given unit normal.
+void appendParallelogram(std::vector<Geometry>& out, const glm::vec3& base, const glm::vec3& e0,
+                         const glm::vec3& e1, const glm::vec3& normal) {
+    const glm::vec3 a = glm::dot(glm::cross(e0, e1), normal) >= 0.0f ? e0 : e1;
+    const glm::vec3 b = a == e0 ? e1 : e0;
+    out.push_back(triangle(base, base + a, base + a + b, normal));
+    out.push_back(triangle(base, base + a + b, base + b, normal));
+}
+
+}  // namespace
+
+void SceneReader::readPrimitive(const json& v, const std::string& key) {
+    const std::string type = requiredType(v, key);
+    const std::string typeKey = member(key, "type");
+    const bool known = isOneOf({"quad", "cube", "sphere", "disk", "mesh", "point", "infinite_sphere"}, type);
+    if (!known && isOneOf(kUnsupportedPrimitives, type)) fail(typeKey, fmt::format("unsupported primitive type '{}'", type));
+    if (!known) fail(typeKey, fmt::format("unknown primitive type '{}'", type));
+
+    Shape shape{"", type};
+    if (const json* name = find(v, "name")) shape.name = string(*name, member(key, "name"));
+    const uint32_t shapeIndex = static_cast<uint32_t>(scene_.shapes.size());
+    scene_.shapes.push_back(shape);
+    // Media on the two sides: a missing one of the two is vacuum; neither leaves the medium unchanged.
+    const json* intMedium = find(v, "int_medium");
+    const json* extMedium = find(v, "ext_medium");
+    const bool hasMedia = (intMedium && !intMedium->is_null()) || (extMedium && !extMedium->is_null());
+    const int32_t intIndex = intMedium && !intMedium->is_null() ? mediumRef(*intMedium, member(key, "int_medium")) : -1;
+    const int32_t extIndex = extMedium && !extMedium->is_null() ? mediumRef(*extMedium, member(key, "ext_medium")) : -1;
+
+    const glm::mat4 m = find(v, "transform") ? transform(v["transform"], member(key, "transform")) : glm::mat4(1.0f);
+
+    // Emission: radiance, or power converted with the shape's power-to-radiance factor
+    std::optional<glm::vec3> emission, power;
+    if (const json* e = find(v, "emission")) emission = colour(*e, member(key, "emission"));
+    if (const json* p = find(v, "power")) power = colour(*p, member(key, "power"));
+    if (emission && power) ignore(member(key, "emission"));
+
+    // Point and environment lights
+    if (type == "point" || type == "infinite_sphere") {
+        PointLikeLight light;
+        light.type = type == "point" ? LightType::Point : LightType::Environment;
+        light.position = glm::vec3(m[3]);
+        light.intensity = power ? *power / (4.0f * kPi) : emission.value_or(glm::vec3(0.0f));
+        light.name = shape.name;
+        if (light.intensity != glm::vec3(0.0f)) scene_.lights.push_back(light);
+        ignoreUnread(v, key, {"name", "type", "transform", "emission", "power"});
+        return;
+    }
+
+    // Surfaces: material(s), world-space geometry and area
+    const json* bsdf = find(v, "bsdf");
+    if (!bsdf) fail(key, "missing 'bsdf'");
+    std::vector<uint32_t> materials;
+    if (type == "mesh" && bsdf->is_array()) {
+        if (bsdf->empty()) fail(member(key, "bsdf"), "the bsdf array is empty");
+        for (size_t i = 0; i < bsdf->size(); ++i) materials.push_back(material((*bsdf)[i], element(member(key, "bsdf"), i)));
+    } else {
+        materials.push_back(material(*bsdf, member(key, "bsdf")));
+    }
+
+    std::vector<Geometry> shapeGeometry;
+    double area = 0.0;
+    if (type == "quad") {
+        // Unit square in local XZ at y = 0; normal = edge1 x edge0 (local +Y)
+        const glm::vec3 e0 = transformVector(m, {1, 0, 0}), e1 = transformVector(m, {0, 0, 1});
+        const glm::vec3 n = glm::cross(e1, e0);
+        area = glm::length(n);
+        if (!isDegenerate(n)) appendParallelogram(shapeGeometry, transformPoint(m, glm::vec3(0.0f)) - 0.5f * (e0 + e1), e0, e1, n / float(area));
+    } else if (type == "cube") {
+        // Unit cube [-0.5, 0.5]^3 placed by the rotation, column lengths and translation of M
+        const glm::mat3 rot = columnDirections(m);
+        const glm::vec3 half = 0.5f * columnLengths(m), centre(m[3]);
+        for (int dim = 0; dim < 3; ++dim) {
+            const int s = (dim + 1) % 3, t = (dim + 2) % 3;
+            area += 8.0 * half[s] * half[t];
+            for (float sign : {-1.0f, 1.0f}) {
+                const glm::vec3 n = sign * rot[dim];
+                const glm::vec3 u = 2.0f * half[s] * rot[s], w = 2.0f * half[t] * rot[t];
+                if (isDegenerate(glm::cross(u, w)) || isDegenerate(n)) continue;
+                appendParallelogram(shapeGeometry, centre + half[dim] * n - 0.5f * (u + w), u, w, n);
+            }
+        }
+    } else if (type == "sphere") {
+        // Unit sphere: radius = largest column length
+        const glm::vec3 lengths = columnLengths(m);
+        Geometry g;
+        g.type = GeometryType::Sphere;
+        g.p0 = glm::vec3(m[3]);
+        g.radius = std::max({lengths.x, lengths.y, lengths.z});
+        area = 4.0 * kPi * double(g.radius) * g.radius;
+        if (g.radius > 0.0f) shapeGeometry.push_back(g);
+    } else if (type == "disk") {
+        // Unit disk in local XZ facing local +Y (Tungsten Disk: r = max of the X and Z column lengths)
+        const glm::vec3 lengths = columnLengths(m);
+        const glm::vec3 n = transformVector(m, {0, 1, 0});
+        Geometry g;
+        g.type = GeometryType::Disk;
+        g.p0 = glm::vec3(m[3]);
+        g.radius = std::max(lengths.x, lengths.z);
+        area = kPi * double(g.radius) * g.radius;
+        if (g.radius > 0.0f && !isDegenerate(n)) {
+            g.normal = glm::normalize(n);
+            shapeGeometry.push_back(g);
+        }
+    } else {
+        // Mesh: vertices by M, geometric normal cross(p1 - p0, p2 - p0), flat shading
+        const std::string fileKey = member(key, "file");
+        const json* fileValue = find(v, "file");
+        if (!fileValue) fail(key, "missing 'file'");
+        const fs::path relative = string(*fileValue, fileKey);
+        const MeshData mesh = loadMesh((relative.is_absolute() ? relative : baseDir_ / relative).string(), file_, fileKey);
+        std::vector<glm::vec3> world(mesh.positions.size());
+        for (size_t i = 0; i < world.size(); ++i) world[i] = transformPoint(m, mesh.positions[i]);
+        for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+            const auto& t = mesh.triangles[i];
+            const glm::vec3 n = glm::cross(world[t[1]] - world[t[0]], world[t[2]] - world[t[0]]);
+            if (isDegenerate(n)) continue;
+            area += 0.5 * glm::length(n);
+            Geometry g = triangle(world[t[0]], world[t[1]], world[t[2]], glm::normalize(n));
+            g.material = materials[std::clamp<int32_t>(mesh.materials[i], 0, int32_t(materials.size()) - 1)];
+            shapeGeometry.push_back(g);
+        }
+    }
+
+    glm::vec3 radiance = emission.value_or(glm::vec3(0.0f));
+    if (power) {
+        if (!(area > 0.0) && *power != glm::vec3(0.0f)) fail(member(key, "power"), "power on a primitive with zero area");
+        radiance = area > 0.0 ? *power / float(kPi * area) : glm::vec3(0.0f);
+    }
+    for (Geometry& g : shapeGeometry) {
+        if (type != "mesh") g.material = materials[0];
+        g.emission = radiance;
+        g.shape = shapeIndex;
+        g.hasMedia = hasMedia;
+        g.intMedium = intIndex;
+        g.extMedium = extIndex;
+        scene_.geometry.push_back(g);
+    }
+    ignoreUnread(v, key, {"name", "type", "transform", "bsdf", "emission", "power", "file", "int_medium", "ext_medium"});
+}
+
+}  // namespace telescope::scene_reader
