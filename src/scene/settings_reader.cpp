@@ -99,7 +99,11 @@ void SceneReader::readIntegrator(const json& v) {
     IntegratorSettings& s = scene_.integrator;
 
     const std::string type = typeOr(v, key, "path_tracer");
-    if (isOneOf(kUnsupportedIntegrators, type)) fail("integrator.type", fmt::format("unsupported integrator type '{}'", type));
+    if (isOneOf(kUnsupportedIntegrators, type))
+        fail("integrator.type",
+             fmt::format("unsupported integrator type '{}' (Telescope has path_tracer, photon_map and "
+                         "progressive_photon_map: try --set integrator.type=\"path_tracer\")",
+                         type));
     if (type == "photon_map" || type == "progressive_photon_map") {
         s.type = type == "photon_map" ? IntegratorType::PhotonMap : IntegratorType::ProgressivePhotonMap;
         readPhotonSettings(v, key);
