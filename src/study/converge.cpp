@@ -16,7 +16,7 @@
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "study/pmf_pilot.h"
-#include "study/study_files.h"
+#include "core/atomic_file.h"
 
 namespace fs = std::filesystem;
 
