@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 
 namespace telescope {
@@ -14,7 +15,9 @@ namespace telescope {
 namespace {
 
 constexpr char kMagic[16] = "TELESCOPE-FILM\x01";  // 15 characters and the terminating zero
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;
+constexpr uint32_t kFlagPerPixelCounts = 1;
+constexpr uint32_t kMaxSeeds = 1u << 20;
 
 template <typename T>
 void put(std::ostream& out, const T& v) {
@@ -53,10 +56,7 @@ private:
 }  // namespace
 
 void saveCheckpoint(const std::string& path, const Checkpoint& c) {
-    std::string tmp = path + ".partial";
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        if (!out) throw std::runtime_error(fmt::format("{}: cannot write checkpoint", path));
+    writeStreamAtomically(path, [&](std::ostream& out) {
         out.write(kMagic, sizeof(kMagic));
         put(out, kVersion);
         put(out, c.film.width());
@@ -66,17 +66,16 @@ void saveCheckpoint(const std::string& path, const Checkpoint& c) {
         put(out, c.seed);
         putString(out, c.scene);
         putString(out, c.estimator);
+        putString(out, c.settings);
+        const std::vector<uint32_t> seeds = c.seeds.empty() ? std::vector<uint32_t>{c.seed} : c.seeds;
+        put(out, uint32_t(seeds.size()));
+        for (uint32_t s : seeds) put(out, s);
+        put(out, c.film.perPixelCounts() ? kFlagPerPixelCounts : 0u);
         for (uint32_t ch = 0; ch < shader::kChannelCount; ++ch) {
             const auto& sums = c.film.sums(ch);
             out.write(reinterpret_cast<const char*>(sums.data()), std::streamsize(sums.size() * sizeof(sums[0])));
         }
-        if (!out.flush()) {
-            out.close();
-            std::filesystem::remove(tmp);
-            throw std::runtime_error(fmt::format("{}: checkpoint write failed", path));
-        }
-    }
-    std::filesystem::rename(tmp, path);
+    });
 }
 
 Checkpoint loadCheckpoint(const std::string& path) {
@@ -85,7 +84,9 @@ Checkpoint loadCheckpoint(const std::string& path) {
     Reader r(in, path);
     char magic[sizeof(kMagic)];
     if (!in.read(magic, sizeof(magic)) || std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) r.fail("the header");
-    if (r.get<uint32_t>("the version") != kVersion) throw InputError(path, "", "unsupported checkpoint version");
+    const uint32_t version = r.get<uint32_t>("the version");
+    if (version != 1 && version != kVersion)
+        throw InputError(path, "", fmt::format("unsupported checkpoint version {}", version));
     uint32_t width = r.get<uint32_t>("the width"), height = r.get<uint32_t>("the height");
     uint32_t channels = r.get<uint32_t>("the channel count");
     if (channels != shader::kChannelCount)
@@ -99,6 +100,17 @@ Checkpoint loadCheckpoint(const std::string& path) {
     c.seed = r.get<uint32_t>("the seed");
     c.scene = r.getString("the scene", uint64_t(1) << 30);
     c.estimator = r.getString("the estimator", 1 << 20);
+    if (version >= 2) {
+        c.settings = r.getString("the settings", 1 << 24);
+        const uint32_t n = r.get<uint32_t>("the seed count");
+        if (n == 0 || n > kMaxSeeds) r.fail("the seed count");
+        for (uint32_t i = 0; i < n; ++i) c.seeds.push_back(r.get<uint32_t>("the seeds"));
+        const uint32_t flags = r.get<uint32_t>("the flags");
+        if (flags & ~kFlagPerPixelCounts) r.fail("the flags");
+        c.film.setPerPixelCounts(flags & kFlagPerPixelCounts);
+    } else {
+        c.seeds = {c.seed};
+    }
     for (uint32_t ch = 0; ch < channels; ++ch) {
         auto& sums = c.film.sums(ch);
         if (!in.read(reinterpret_cast<char*>(sums.data()), std::streamsize(sums.size() * sizeof(sums[0]))))
