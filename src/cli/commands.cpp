@@ -132,9 +132,14 @@ void writeImages(const ImageOutputOptions& o, const Film& film, const OutputInfo
         {"telescope:device", info.device},
         {"telescope:non_finite_samples", std::to_string(film.nonFiniteSamples())},
     };
+    if (!info.shards.empty()) {
+        std::string seeds;
+        for (uint32_t seed : info.seeds) seeds += (seeds.empty() ? "" : ",") + std::to_string(seed);
+        meta.entries.push_back({"telescope:seeds", seeds});
+        meta.entries.push_back({"telescope:shards", info.shards});
+    }
     writeExr(o.exrPath, film, meta);
     if (!o.noPng) writePngPreview(o.pngPath, film);
-    if (!info.shards.empty()) meta.entries.push_back({"telescope:shards", info.shards});
     if (!o.checkpointPath.empty()) saveCheckpoint(o.checkpointPath, checkpointOf(film, info));
 }
 
@@ -318,8 +323,11 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
         if (o.timeLimit <= 0) {
             // Pieces of about checkpointInterval seconds, sized from the speed so far.
             const double perSample = added > 0 ? before / double(added) : 0.0;
-            if (perSample > 0.0)
-                request.spp = std::min<uint64_t>(request.spp, std::max<uint64_t>(1, uint64_t(o.checkpointInterval / perSample)));
+            // The first piece is one sample: until then the speed is unknown, and a piece of the
+            // whole count would never checkpoint.
+            request.spp = perSample > 0.0 ? std::min<uint64_t>(request.spp, std::max<uint64_t>(
+                                                                                 1, uint64_t(o.checkpointInterval / perSample)))
+                                          : 1;
         }
         renderer.render(request);
         elapsed += renderer.stats().wallSeconds - before;

@@ -171,6 +171,14 @@ std::vector<KeyToken> parseKeyPath(const std::string& key, const std::string& sc
 // Sets the value at the key path, creating missing object keys on the way.
 void applyOverride(json& doc, const SceneOverride& o, const std::string& sceneName) {
     json* node = &doc;
+    // The key and a bare-string value enter the document, which must stay valid UTF-8 to be
+    // written out (fuzz/regressions/set-value-invalid-utf8.bin).
+    try {
+        (void)json(o.key + o.value).dump();
+    } catch (const json::type_error&) {
+        throw InputError("", "--set", fmt::format("the override of '{}' is not valid UTF-8 text",
+                                                  json(o.key).dump(-1, ' ', false, json::error_handler_t::replace)));
+    }
     std::string walked;
     for (const KeyToken& t : parseKeyPath(o.key, sceneName)) {
         if (t.isIndex) {
