@@ -212,56 +212,50 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
     }
     reportIgnoredKeys(scene, common.quiet);
 
-    // A runtime failure (device lost, out of memory) keeps every checkpoint and says so.
-    KeptCheckpoints kept{{o.output.checkpointPath, o.resumePath}};
-    try {
-        gpu::Context context(contextOptions(common));
-        PmfPilotResult pilot;
-        if (resolveAutoPmf(context, scene, o.seed, &pilot) && !common.quiet) fmt::print(stderr, "{}", pilot.summary());
-        Renderer renderer(context, scene, o.seed);
-        if (resume) renderer.resume(resume->film);
-        const OutputInfo info{scene.path, scene.document.dump(), renderer.plan().estimator, context.info().name,
-                              resolvedSettings(scene).dump(), o.seed, 0.0};
+    // A runtime failure (device lost, out of memory) names the checkpoints it leaves (main.cpp).
+    keepCheckpointsOnFailure({o.output.checkpointPath, o.resumePath});
+    gpu::Context context(contextOptions(common));
+    PmfPilotResult pilot;
+    if (resolveAutoPmf(context, scene, o.seed, &pilot) && !common.quiet) fmt::print(stderr, "{}", pilot.summary());
+    Renderer renderer(context, scene, o.seed);
+    if (resume) renderer.resume(resume->film);
+    const OutputInfo info{scene.path, scene.document.dump(), renderer.plan().estimator, context.info().name,
+                          resolvedSettings(scene).dump(), o.seed, 0.0};
 
-        RenderRequest request;
-        request.timeLimit = o.timeLimit;
-        request.spp = o.timeLimit > 0 ? 0 : (o.spp ? o.spp : scene.renderer.spp);
-        ProgressReporter progress(common.quiet, "render");
-        PeriodicCheckpoint periodic(o.checkpointEvery, o.output.checkpointPath,
-                                    [&] { return checkpointOf(renderer.film(), info); });
-        request.progress = [&](const RenderProgress& p) {
-            progress(p);
-            periodic.afterBatch();
-        };
-        request.stop = [] { return InterruptGuard::requested(); };
-        renderer.render(request);
-        progress.finish();
-        checkValidation(context);
+    RenderRequest request;
+    request.timeLimit = o.timeLimit;
+    request.spp = o.timeLimit > 0 ? 0 : (o.spp ? o.spp : scene.renderer.spp);
+    ProgressReporter progress(common.quiet, "render");
+    PeriodicCheckpoint periodic(o.checkpointEvery, o.output.checkpointPath,
+                                [&] { return checkpointOf(renderer.film(), info); });
+    request.progress = [&](const RenderProgress& p) {
+        progress(p);
+        periodic.afterBatch();
+    };
+    request.stop = [] { return InterruptGuard::requested(); };
+    renderer.render(request);
+    progress.finish();
+    checkValidation(context);
 
-        Film film = renderer.film();
-        const RenderStats& stats = renderer.stats();
-        OutputInfo done = info;
-        done.seconds = stats.wallSeconds;
-        const uint64_t resumedSpp = resume ? resume->film.samplesPerPixel() : 0;
-        if (InterruptGuard::requested())
-            return saveInterrupted(o.output, film, done, film.samplesPerPixel() - resumedSpp,
-                                   "continue with --resume " +
-                                       (o.output.checkpointPath.empty() ? o.output.exrPath + ".checkpoint"
-                                                                        : o.output.checkpointPath));
-        writeImages(o.output, film, done);
-        if (!o.statsPath.empty()) writeStatsJson(o.statsPath, scene, context, renderer, film);
-        if (!common.quiet) {
-            const double paths = double(stats.samplesPerPixel - resumedSpp) * double(film.pixelCount());
-            fmt::print(stderr, "wrote {} ({}x{}, {} spp, {:.2f} s, {:.2f} Mpaths/s on {})\n", o.output.exrPath,
-                       film.width(), film.height(), film.samplesPerPixel(), stats.wallSeconds,
-                       stats.wallSeconds > 0 ? paths / stats.wallSeconds * 1e-6 : 0.0, context.info().name);
-        }
-        return 0;
-    } catch (const InputError&) {
-        throw;
-    } catch (const std::exception& e) {
-        throw std::runtime_error(e.what() + kept.note());
+    Film film = renderer.film();
+    const RenderStats& stats = renderer.stats();
+    OutputInfo done = info;
+    done.seconds = stats.wallSeconds;
+    const uint64_t resumedSpp = resume ? resume->film.samplesPerPixel() : 0;
+    if (InterruptGuard::requested())
+        return saveInterrupted(o.output, film, done, film.samplesPerPixel() - resumedSpp,
+                               "continue with --resume " +
+                                   (o.output.checkpointPath.empty() ? o.output.exrPath + ".checkpoint"
+                                                                    : o.output.checkpointPath));
+    writeImages(o.output, film, done);
+    if (!o.statsPath.empty()) writeStatsJson(o.statsPath, scene, context, renderer, film);
+    if (!common.quiet) {
+        const double paths = double(stats.samplesPerPixel - resumedSpp) * double(film.pixelCount());
+        fmt::print(stderr, "wrote {} ({}x{}, {} spp, {:.2f} s, {:.2f} Mpaths/s on {})\n", o.output.exrPath,
+                   film.width(), film.height(), film.samplesPerPixel(), stats.wallSeconds,
+                   stats.wallSeconds > 0 ? paths / stats.wallSeconds * 1e-6 : 0.0, context.info().name);
     }
+    return 0;
 }
 
 int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn) {
@@ -285,8 +279,7 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
                        resume->film.samplesPerPixel());
     }
 
-    KeptCheckpoints kept{{o.output.checkpointPath}};
-    try {
+    keepCheckpointsOnFailure({o.output.checkpointPath});
     gpu::Context context(contextOptions(common));
     Renderer renderer(context, scene, o.seed);
     if (resume) renderer.resume(resume->film);
@@ -346,11 +339,6 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
         fmt::print(stderr, "wrote {} ({} spp, {} non-finite samples; checkpoint {})\n", o.output.exrPath,
                    film.samplesPerPixel(), film.nonFiniteSamples(), o.output.checkpointPath);
     return 0;
-    } catch (const InputError&) {
-        throw;
-    } catch (const std::exception& e) {
-        throw std::runtime_error(e.what() + kept.note());
-    }
 }
 
 // runMerge: cli/shard.cpp

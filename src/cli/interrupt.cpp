@@ -83,14 +83,19 @@ int saveInterrupted(ImageOutputOptions o, const Film& film, const OutputInfo& in
     return InterruptGuard::exitCode();
 }
 
-std::string KeptCheckpoints::note() const {
+namespace {
+std::vector<std::string> gKeptCheckpoints;
+}
+
+void keepCheckpointsOnFailure(std::vector<std::string> paths) { gKeptCheckpoints = std::move(paths); }
+
+std::string keptCheckpointsNote() {
     std::string s;
-    for (const auto& p : paths) {
+    for (const auto& p : gKeptCheckpoints) {
         if (p.empty() || !std::filesystem::exists(p)) continue;
         try {
-            Checkpoint c = loadCheckpoint(p);
-            s += fmt::format("; the checkpoint {} ({} spp) is kept: continue with --resume {}", p,
-                             c.film.samplesPerPixel(), p);
+            const CheckpointHeader c = readCheckpointHeader(p);
+            s += fmt::format("; the checkpoint {} ({} spp) is kept: continue with --resume {}", p, c.samplesPerPixel, p);
         } catch (const std::exception&) {
             // Not a checkpoint this build reads: say nothing about it.
         }

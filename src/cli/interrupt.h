@@ -52,11 +52,11 @@ private:
 int saveInterrupted(ImageOutputOptions o, const Film& film, const OutputInfo& info, uint64_t newSamples,
                     const std::string& howToContinue);
 
-// The checkpoints a failed render leaves (a device lost, out of memory): note() is appended to
-// the error, e.g. "; the checkpoint a.exr.checkpoint (48 spp) is kept: continue with --resume".
-struct KeptCheckpoints {
-    std::vector<std::string> paths;
-    std::string note() const;
-};
+// The checkpoints a render leaves when it fails at run time (a device lost, out of memory):
+// main.cpp appends keptCheckpointsNote() to the error, e.g. "; the checkpoint a.exr.checkpoint
+// (48 spp) is kept: continue with --resume a.exr.checkpoint". Paths that do not exist (or are not
+// checkpoints) when the error is reported are left out.
+void keepCheckpointsOnFailure(std::vector<std::string> paths);
+std::string keptCheckpointsNote();
 
 }  // namespace telescope::cli

@@ -100,11 +100,12 @@ MergedRender mergeCheckpointFiles(const std::vector<std::string>& paths) {
     if (paths.size() < 2) throw InputError("", "inputs", "merge needs at least two checkpoints");
     struct Part {
         std::string path;
-        Checkpoint c;
+        CheckpointHeader c;
     };
+    // ---- Check every header first (cheap), then add the sums one file at a time ----
     std::vector<Part> parts;
     for (const auto& path : paths) {
-        parts.push_back({path, loadCheckpoint(path)});
+        parts.push_back({path, readCheckpointHeader(path)});
         const Part& p = parts.back();
         const Part& first = parts.front();
         if (p.c.scene != first.c.scene)
@@ -122,9 +123,9 @@ MergedRender mergeCheckpointFiles(const std::vector<std::string>& paths) {
         if (p.c.estimator != first.c.estimator)
             throw InputError(path, "", fmt::format("was rendered with another estimator than {} ('{}' vs '{}')",
                                                    first.path, p.c.estimator, first.c.estimator));
-        if (p.c.film.width() != first.c.film.width() || p.c.film.height() != first.c.film.height())
+        if (p.c.width != first.c.width || p.c.height != first.c.height)
             throw InputError(path, "", fmt::format("has another image size than {}", first.path));
-        if (p.c.film.perPixelCounts() != first.c.film.perPixelCounts())
+        if (p.c.perPixelCounts != first.c.perPixelCounts)
             throw InputError(path, "", fmt::format("counts samples per pixel unlike {}", first.path));
         for (size_t i = 0; i + 1 < parts.size(); ++i)
             for (uint32_t s : p.c.seeds)
@@ -138,15 +139,15 @@ MergedRender mergeCheckpointFiles(const std::vector<std::string>& paths) {
         return *std::min_element(a.c.seeds.begin(), a.c.seeds.end()) < *std::min_element(b.c.seeds.begin(), b.c.seeds.end());
     });
     MergedRender m;
-    m.film = parts.front().c.film;
-    for (size_t i = 1; i < parts.size(); ++i) m.film.merge(parts[i].c.film);
+    m.film = loadCheckpoint(parts.front().path).film;
+    for (size_t i = 1; i < parts.size(); ++i) m.film.merge(loadCheckpoint(parts[i].path).film);
     m.scene = parts.front().c.scene;
     m.estimator = parts.front().c.estimator;
     m.settings = parts.front().c.settings;
     nlohmann::json shards = nlohmann::json::array();
     for (const auto& p : parts) {
         m.seeds.insert(m.seeds.end(), p.c.seeds.begin(), p.c.seeds.end());
-        shards.push_back({{"file", p.path}, {"seeds", p.c.seeds}, {"spp", p.c.film.samplesPerPixel()}});
+        shards.push_back({{"file", p.path}, {"seeds", p.c.seeds}, {"spp", p.c.samplesPerPixel}});
     }
     std::sort(m.seeds.begin(), m.seeds.end());
     m.shards = shards.dump();
@@ -261,7 +262,7 @@ int runShardRender(const CommonOptions& commonIn, const ShardRenderOptions& o) {
     if (plan.sppPerShard) {
         uint64_t have = 0;
         if (fs::exists(r.output.checkpointPath)) {
-            have = loadCheckpoint(r.output.checkpointPath).film.samplesPerPixel();
+            have = readCheckpointHeader(r.output.checkpointPath).samplesPerPixel;
             r.resumePath = r.output.checkpointPath;
         }
         if (have > plan.sppPerShard)
@@ -306,7 +307,7 @@ int runShardMerge(const ShardMergeOptions& optionsIn) {
     }
     // Every checkpoint must be the plan's: its scene, its settings and its own seed.
     for (const auto& path : present) {
-        Checkpoint c = loadCheckpoint(path);
+        const CheckpointHeader c = readCheckpointHeader(path);
         const uint32_t task = uint32_t(std::stoul(fs::path(path).stem().string().substr(6)));
         if (c.scene != plan.scene)
             throw InputError(path, firstDifference(plan.scene, c.scene),

@@ -78,40 +78,74 @@ void saveCheckpoint(const std::string& path, const Checkpoint& c) {
     });
 }
 
-Checkpoint loadCheckpoint(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path, "", "cannot open checkpoint");
-    Reader r(in, path);
+namespace {
+
+// Reads everything before the pixel sums.
+CheckpointHeader readHeader(std::istream& in, Reader& r, const std::string& path) {
     char magic[sizeof(kMagic)];
     if (!in.read(magic, sizeof(magic)) || std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) r.fail("the header");
     const uint32_t version = r.get<uint32_t>("the version");
     if (version != 1 && version != kVersion)
         throw InputError(path, "", fmt::format("unsupported checkpoint version {}", version));
-    uint32_t width = r.get<uint32_t>("the width"), height = r.get<uint32_t>("the height");
+    CheckpointHeader h;
+    h.width = r.get<uint32_t>("the width");
+    h.height = r.get<uint32_t>("the height");
     uint32_t channels = r.get<uint32_t>("the channel count");
     if (channels != shader::kChannelCount)
         throw InputError(path, "", fmt::format("checkpoint has {} channels, this build keeps {}", channels,
                                                shader::kChannelCount));
-    if (width == 0 || height == 0 || uint64_t(width) * height > (uint64_t(1) << 28))
-        throw InputError(path, "", fmt::format("impossible image size {}x{}", width, height));
-    Checkpoint c;
-    c.film = Film(width, height);
-    c.film.setSamplesPerPixel(r.get<uint64_t>("the sample count"));
-    c.seed = r.get<uint32_t>("the seed");
-    c.scene = r.getString("the scene", uint64_t(1) << 30);
-    c.estimator = r.getString("the estimator", 1 << 20);
+    if (h.width == 0 || h.height == 0 || uint64_t(h.width) * h.height > (uint64_t(1) << 28))
+        throw InputError(path, "", fmt::format("impossible image size {}x{}", h.width, h.height));
+    h.samplesPerPixel = r.get<uint64_t>("the sample count");
+    h.seed = r.get<uint32_t>("the seed");
+    h.scene = r.getString("the scene", uint64_t(1) << 30);
+    h.estimator = r.getString("the estimator", 1 << 20);
     if (version >= 2) {
-        c.settings = r.getString("the settings", 1 << 24);
+        h.settings = r.getString("the settings", 1 << 24);
         const uint32_t n = r.get<uint32_t>("the seed count");
         if (n == 0 || n > kMaxSeeds) r.fail("the seed count");
-        for (uint32_t i = 0; i < n; ++i) c.seeds.push_back(r.get<uint32_t>("the seeds"));
+        for (uint32_t i = 0; i < n; ++i) h.seeds.push_back(r.get<uint32_t>("the seeds"));
         const uint32_t flags = r.get<uint32_t>("the flags");
         if (flags & ~kFlagPerPixelCounts) r.fail("the flags");
-        c.film.setPerPixelCounts(flags & kFlagPerPixelCounts);
+        h.perPixelCounts = flags & kFlagPerPixelCounts;
     } else {
-        c.seeds = {c.seed};
+        h.seeds = {h.seed};
     }
-    for (uint32_t ch = 0; ch < channels; ++ch) {
+    return h;
+}
+
+uint64_t sumsBytes(const CheckpointHeader& h) {
+    return uint64_t(h.width) * h.height * shader::kChannelCount * sizeof(glm::dvec4);
+}
+
+}  // namespace
+
+CheckpointHeader readCheckpointHeader(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path, "", "cannot open checkpoint");
+    Reader r(in, path);
+    CheckpointHeader h = readHeader(in, r, path);
+    std::error_code ec;
+    const uint64_t size = std::filesystem::file_size(path, ec);
+    if (ec || size != uint64_t(in.tellg()) + sumsBytes(h)) r.fail("the pixel sums");
+    return h;
+}
+
+Checkpoint loadCheckpoint(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path, "", "cannot open checkpoint");
+    Reader r(in, path);
+    const CheckpointHeader h = readHeader(in, r, path);
+    Checkpoint c;
+    c.film = Film(h.width, h.height);
+    c.film.setSamplesPerPixel(h.samplesPerPixel);
+    c.film.setPerPixelCounts(h.perPixelCounts);
+    c.seed = h.seed;
+    c.scene = h.scene;
+    c.estimator = h.estimator;
+    c.settings = h.settings;
+    c.seeds = h.seeds;
+    for (uint32_t ch = 0; ch < shader::kChannelCount; ++ch) {
         auto& sums = c.film.sums(ch);
         if (!in.read(reinterpret_cast<char*>(sums.data()), std::streamsize(sums.size() * sizeof(sums[0]))))
             r.fail("the pixel sums");

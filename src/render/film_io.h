@@ -31,4 +31,17 @@ void saveCheckpoint(const std::string& path, const Checkpoint& checkpoint);
 // Throws InputError naming the file when it is missing, truncated or not a checkpoint.
 Checkpoint loadCheckpoint(const std::string& path);
 
+// What a checkpoint records about itself, without reading its pixel sums (a merge of many
+// large checkpoints checks them all before it holds more than two films in memory). Checks
+// that the file is as long as its header says.
+struct CheckpointHeader {
+    uint32_t width = 0, height = 0;
+    uint64_t samplesPerPixel = 0;
+    uint32_t seed = 0;
+    std::string scene, estimator, settings;
+    std::vector<uint32_t> seeds;
+    bool perPixelCounts = false;
+};
+CheckpointHeader readCheckpointHeader(const std::string& path);
+
 }  // namespace telescope
