@@ -1,5 +1,6 @@
 
 #include "cli/commands.h"
+#include "cli/interrupt.h"
 #include "cli/outputs.h"
 
 #include <unistd.h>
@@ -14,6 +15,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "gpu/context.h"
 #include "render/film_io.h"
@@ -129,10 +131,20 @@ void writeImages(const ImageOutputOptions& o, const Film& film, const OutputInfo
         {"telescope:device", info.device},
         {"telescope:non_finite_samples", std::to_string(film.nonFiniteSamples())},
     };
+    if (!info.shards.empty()) {
+        std::string seeds;
+        for (uint32_t seed : info.seeds) seeds += (seeds.empty() ? "" : ",") + std::to_string(seed);
+        meta.entries.push_back({"telescope:seeds", seeds});
+        meta.entries.push_back({"telescope:shards", info.shards});
+    }
     writeExr(o.exrPath, film, meta);
     if (!o.noPng) writePngPreview(o.pngPath, film);
-    if (!o.checkpointPath.empty())
-        saveCheckpoint(o.checkpointPath, Checkpoint{film, info.seed, info.sceneDocument, info.estimator});
+    if (!o.checkpointPath.empty()) saveCheckpoint(o.checkpointPath, checkpointOf(film, info));
+}
+
+Checkpoint checkpointOf(const Film& film, const OutputInfo& info) {
+    return Checkpoint{film, info.seed, info.sceneDocument, info.estimator, info.settings,
+                      info.seeds.empty() ? std::vector<uint32_t>{info.seed} : info.seeds};
 }
 
 namespace {
@@ -183,20 +195,16 @@ void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Cont
     j["estimator"] = renderer.plan().estimator;
     j["settings"] = resolvedSettings(scene);
     for (const auto& [name, p] : stats.passes) j["passes"][name] = {{"dispatches", p.dispatches}, {"gpu_ms", p.gpuMs}};
-    std::string tmp = path + ".partial";
-    {
-        std::ofstream f(tmp);
-        f << j.dump(2) << "\n";
-        if (!f.flush()) throw std::runtime_error(fmt::format("{}: write failed", path));
-    }
-    fs::rename(tmp, path);
+    writeTextAtomically(path, j.dump(2) + "\n");
 }
 
 }  // namespace
 
 int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
     RenderOptions o = optionsIn;
+    InterruptGuard interrupts;
     Scene scene = loadWithOverrides(common);
+    if (o.output.checkpointPath.empty() && o.checkpointEvery > 0) o.output.checkpointPath = o.output.exrPath + ".checkpoint";
     checkImageOutputs(o.output);
     if (!o.statsPath.empty()) checkOutputPath(o.statsPath, "--stats-json", ".json");
     std::optional<Checkpoint> resume;
@@ -210,6 +218,8 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
     }
     reportIgnoredKeys(scene, common.quiet);
 
+    // A runtime failure (device lost, out of memory) names the checkpoints it leaves (main.cpp).
+    keepCheckpointsOnFailure({o.output.checkpointPath, o.resumePath});
     gpu::Context context(contextOptions(common));
     PmfPilotResult pilot;
     if (resolveAutoPmf(context, scene, o.seed, &pilot) && !common.quiet) fmt::print(stderr, "{}", pilot.summary());
@@ -218,25 +228,38 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
         checkSameEstimator(*resume, o.resumePath, renderer);
         renderer.resume(resume->film);
     }
+    const OutputInfo info{scene.path, scene.document.dump(), renderer.plan().estimator, context.info().name,
+                          resolvedSettings(scene).dump(), o.seed, 0.0};
 
     RenderRequest request;
     request.timeLimit = o.timeLimit;
     request.spp = o.timeLimit > 0 ? 0 : (o.spp ? o.spp : scene.renderer.spp);
     ProgressReporter progress(common.quiet, "render");
-    request.progress = [&](const RenderProgress& p) { progress(p); };
+    PeriodicCheckpoint periodic(o.checkpointEvery, o.output.checkpointPath,
+                                [&] { return checkpointOf(renderer.film(), info); });
+    request.progress = [&](const RenderProgress& p) {
+        progress(p);
+        periodic.afterBatch();
+    };
+    request.stop = [] { return InterruptGuard::requested(); };
     renderer.render(request);
     progress.finish();
     checkValidation(context);
 
     Film film = renderer.film();
     const RenderStats& stats = renderer.stats();
-    writeImages(o.output, film,
-                {scene.path, scene.document.dump(), renderer.plan().estimator, context.info().name,
-                 resolvedSettings(scene).dump(), o.seed, stats.wallSeconds});
+    OutputInfo done = info;
+    done.seconds = stats.wallSeconds;
+    const uint64_t resumedSpp = resume ? resume->film.samplesPerPixel() : 0;
+    if (InterruptGuard::requested())
+        return saveInterrupted(o.output, film, done, film.samplesPerPixel() - resumedSpp,
+                               "continue with --resume " +
+                                   (o.output.checkpointPath.empty() ? o.output.exrPath + ".checkpoint"
+                                                                    : o.output.checkpointPath));
+    writeImages(o.output, film, done);
     if (!o.statsPath.empty()) writeStatsJson(o.statsPath, scene, context, renderer, film);
     if (!common.quiet) {
-        const double paths = double(stats.samplesPerPixel - (resume ? resume->film.samplesPerPixel() : 0)) *
-                             double(film.pixelCount());
+        const double paths = double(stats.samplesPerPixel - resumedSpp) * double(film.pixelCount());
         fmt::print(stderr, "wrote {} ({}x{}, {} spp, {:.2f} s, {:.2f} Mpaths/s on {})\n", o.output.exrPath,
                    film.width(), film.height(), film.samplesPerPixel(), stats.wallSeconds,
                    stats.wallSeconds > 0 ? paths / stats.wallSeconds * 1e-6 : 0.0, context.info().name);
@@ -246,6 +269,7 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
 
 int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn) {
     ReferenceOptions o = optionsIn;
+    InterruptGuard interrupts;
     if (o.output.checkpointPath.empty()) o.output.checkpointPath = o.output.exrPath + ".checkpoint";
     Scene scene = loadWithOverrides(common);
     const UnbiasedSetup setup = unbiasedSetup(scene);
@@ -264,6 +288,7 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
                        resume->film.samplesPerPixel());
     }
 
+    keepCheckpointsOnFailure({o.output.checkpointPath});
     gpu::Context context(contextOptions(common));
     Renderer renderer(context, scene, o.seed);
     if (resume) {
@@ -279,8 +304,9 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
     // Render in pieces, checkpointing after each, so an interrupted reference loses one piece.
     ProgressReporter progress(common.quiet, "reference");
     double elapsed = 0.0;
-    while (true) {
+    while (!InterruptGuard::requested()) {
         RenderRequest request;
+        request.stop = [] { return InterruptGuard::requested(); };
         const uint64_t added = renderer.stats().samplesPerPixel - startSpp;
         if (o.timeLimit > 0) {
             if (elapsed >= o.timeLimit) break;
@@ -302,18 +328,24 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
         if (o.timeLimit <= 0) {
             // Pieces of about checkpointInterval seconds, sized from the speed so far.
             const double perSample = added > 0 ? before / double(added) : 0.0;
-            if (perSample > 0.0)
-                request.spp = std::min<uint64_t>(request.spp, std::max<uint64_t>(1, uint64_t(o.checkpointInterval / perSample)));
+            // The first piece is one sample: until then the speed is unknown, and a piece of the
+            // whole count would never checkpoint.
+            request.spp = perSample > 0.0 ? std::min<uint64_t>(request.spp, std::max<uint64_t>(
+                                                                                 1, uint64_t(o.checkpointInterval / perSample)))
+                                          : 1;
         }
         renderer.render(request);
         elapsed += renderer.stats().wallSeconds - before;
         checkValidation(context);
-        saveCheckpoint(o.output.checkpointPath, Checkpoint{renderer.film(), o.seed, info.sceneDocument, info.estimator});
+        if (renderer.stats().samplesPerPixel > startSpp) saveCheckpoint(o.output.checkpointPath, checkpointOf(renderer.film(), info));
     }
     progress.finish();
     Film film = renderer.film();
     OutputInfo done = info;
     done.seconds = renderer.stats().wallSeconds;
+    if (InterruptGuard::requested())
+        return saveInterrupted(o.output, film, done, film.samplesPerPixel() - startSpp,
+                               "run the same command again to continue");
     writeImages(o.output, film, done);
     if (!common.quiet)
         fmt::print(stderr, "wrote {} ({} spp, {} non-finite samples; checkpoint {})\n", o.output.exrPath,
@@ -321,35 +353,7 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
     return 0;
 }
 
-int runMerge(const MergeOptions& optionsIn) {
-    MergeOptions o = optionsIn;
-    if (o.inputs.size() < 2) throw InputError("", "inputs", "merge needs at least two checkpoints");
-    checkImageOutputs(o.output);
-    std::vector<Checkpoint> parts;
-    for (const auto& path : o.inputs) {
-        parts.push_back(loadCheckpoint(path));
-        const Checkpoint& c = parts.back();
-        if (c.scene != parts.front().scene)
-            throw InputError(path, "", fmt::format("renders another scene than {}", o.inputs.front()));
-        if (c.film.width() != parts.front().film.width() || c.film.height() != parts.front().film.height())
-            throw InputError(path, "", "has another image size");
-        for (size_t i = 0; i + 1 < parts.size(); ++i)
-            if (parts[i].seed == c.seed)
-                throw InputError(path, "", fmt::format("has the same seed ({}) as {}: its samples are not independent",
-                                                       c.seed, o.inputs[i]));
-    }
-    Film film = parts.front().film;
-    for (size_t i = 1; i < parts.size(); ++i) film.merge(parts[i].film);
-    nlohmann::json doc = nlohmann::json::parse(parts.front().scene, nullptr, false);
-    std::string seeds;
-    for (const auto& p : parts) seeds += (seeds.empty() ? "" : ",") + std::to_string(p.seed);
-    OutputInfo info{"merged", parts.front().scene, parts.front().estimator, "merged", "", parts.front().seed, 0.0};
-    writeImages(o.output, film, info);
-    if (!o.quiet)
-        fmt::print(stderr, "wrote {} ({} spp from {} renders, seeds {})\n", o.output.exrPath, film.samplesPerPixel(),
-                   parts.size(), seeds);
-    return 0;
-}
+// runMerge: cli/shard.cpp
 
 int runConverge(const CommonOptions& common, const ConvergeOptionsCli& c) {
     ConvergeOptions o;

@@ -33,6 +33,7 @@ struct RenderOptions {
     bool seedGiven = false;  // with --resume the checkpoint's seed is used unless --seed says otherwise
     std::string statsPath;
     std::string resumePath;  // a checkpoint to continue
+    double checkpointEvery = 0.0;  // seconds between periodic checkpoints (0: only at the end)
 };
 
 struct ReferenceOptions {

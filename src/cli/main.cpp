@@ -4,6 +4,8 @@
 //                          [--checkpoint FILE] [--resume FILE]
 //   telescope reference SCENE -o REF.exr (--spp N | --time SECONDS)    unbiased, resumable
 //   telescope merge A.checkpoint B.checkpoint ... -o OUT.exr            independent renders
+//   telescope shard SCENE --shards N --spp-per-shard S -o DIR            scale-out (cli/shard.h)
+//   telescope shard-render DIR [--task I]   telescope shard-merge DIR -o OUT.exr
 //   telescope converge SCENE --reference REF.exr --methods A,B (--time T | --spp LIST) -o DIR
 //   telescope plan SCENE [--set key=value ...]
 //   telescope view SCENE [--set key=value ...] [-o SAVE.exr] [--spp N]   interactive (GLFW window)
@@ -16,6 +18,8 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
+#include "cli/interrupt.h"
+#include "cli/shard.h"
 #include "core/error.h"
 #include "study/methods.h"
 #include "viewer/view_command.h"
@@ -58,6 +62,9 @@ int main(int argc, char** argv) {
     render->add_option("--stats-json", renderOptions.statsPath, "Write per-pass times, dispatch counts and device here");
     render->add_option("--resume", renderOptions.resumePath,
                        "Continue the render in this checkpoint (same scene and overrides), adding --spp or --time");
+    render->add_option("--checkpoint-every", renderOptions.checkpointEvery,
+                       "Also write the checkpoint every SECONDS while rendering (default file: OUT.exr.checkpoint)")
+        ->check(CLI::PositiveNumber);
 
     // ---- reference ----
     ReferenceOptions referenceOptions;
@@ -71,7 +78,7 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber)
         ->excludes(refSpp);
     reference->add_option("--seed", referenceOptions.seed, "Random seed");
-    reference->add_option("--checkpoint-interval", referenceOptions.checkpointInterval,
+    reference->add_option("--checkpoint-every,--checkpoint-interval", referenceOptions.checkpointInterval,
                           "Seconds between checkpoints (default 30)")
         ->check(CLI::PositiveNumber);
 
@@ -81,6 +88,37 @@ int main(int argc, char** argv) {
     merge->add_option("inputs", mergeOptions.inputs, "Checkpoints")->required();
     addImageOutput(merge, mergeOptions.output, "Also write the merged state here");
     merge->add_flag("-q,--quiet", mergeOptions.quiet, "No output but errors");
+
+    // ---- shard, shard-render, shard-merge: scale-out (cli/shard.h, tools/slurm/) ----
+    ShardPlanOptions shardOptions;
+    auto* shard = app.add_subcommand("shard", "Plan a render split into shards of seeds SEED+0..N-1 (a Slurm array: "
+                                              "tools/slurm/submit): writes DIR/shards.json");
+    addCommon(shard);
+    shard->add_option("--shards", shardOptions.shards, "Number of shards (array tasks)")->required()->check(CLI::PositiveNumber);
+    auto* shardSpp = shard->add_option("--spp-per-shard", shardOptions.sppPerShard, "Samples per pixel of each shard")
+                         ->check(CLI::PositiveNumber);
+    shard->add_option("--time-per-shard", shardOptions.timePerShard, "Or: seconds of rendering per shard")
+        ->check(CLI::PositiveNumber)
+        ->excludes(shardSpp);
+    shard->add_option("--seed", shardOptions.seed, "Base seed: shard i renders seed SEED + i");
+    shard->add_option("-o,--output", shardOptions.outDir, "Directory for the plan, the shards and their checkpoints")
+        ->required();
+    ShardRenderOptions shardRenderOptions;
+    auto* shardRender = app.add_subcommand("shard-render", "Render one shard of a plan (an array task); resumes its "
+                                                           "checkpoint when requeued");
+    shardRender->add_option("dir", shardRenderOptions.dir, "The plan's directory")->required();
+    shardRender->add_option("--task", shardRenderOptions.task, "Shard index (default: $SLURM_ARRAY_TASK_ID)");
+    shardRender->add_option("--checkpoint-every", shardRenderOptions.checkpointEvery,
+                            "Seconds between checkpoints (default 60)")
+        ->check(CLI::PositiveNumber);
+    addCommon(shardRender, false);
+    ShardMergeOptions shardMergeOptions;
+    auto* shardMerge = app.add_subcommand("shard-merge", "Merge every shard of a plan into one EXR (the dependent job)");
+    shardMerge->add_option("dir", shardMergeOptions.dir, "The plan's directory")->required();
+    addImageOutput(shardMerge, shardMergeOptions.output, "Also write the merged state here");
+    shardMerge->add_flag("--allow-missing", shardMergeOptions.allowMissing,
+                         "Merge the shards that have a checkpoint when some have none (failed tasks)");
+    shardMerge->add_flag("-q,--quiet", shardMergeOptions.quiet, "No output but errors");
 
     // ---- converge ----
     ConvergeOptionsCli convergeOptions;
@@ -159,6 +197,9 @@ int main(int argc, char** argv) {
         if (render->parsed()) return runRender(common, renderOptions);
         if (reference->parsed()) return runReference(common, referenceOptions);
         if (merge->parsed()) return runMerge(mergeOptions);
+        if (shard->parsed()) return runShardPlan(common, shardOptions);
+        if (shardRender->parsed()) return runShardRender(common, shardRenderOptions);
+        if (shardMerge->parsed()) return runShardMerge(shardMergeOptions);
         if (converge->parsed()) return runConverge(common, convergeOptions);
         if (plan->parsed()) return runPlan(common);
         if (view->parsed()) return viewer::runView(common, viewOptions);
@@ -168,7 +209,7 @@ int main(int argc, char** argv) {
         fmt::print(stderr, "telescope: {}\n", e.what());
         return 2;
     } catch (const std::exception& e) {
-        fmt::print(stderr, "telescope: error: {}\n", e.what());
+        fmt::print(stderr, "telescope: error: {}{}\n", e.what(), keptCheckpointsNote());
         return 1;
     }
 }

@@ -4,10 +4,12 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "cli/commands.h"
 #include "gpu/context.h"
 #include "render/film.h"
+#include "render/film_io.h"
 #include "scene/scene.h"
 
 namespace telescope::cli {
@@ -27,7 +29,12 @@ struct OutputInfo {
     std::string settings;  // resolvedSettings(): the settings as run (defaults filled, auto resolved)
     uint32_t seed = 0;
     double seconds = 0.0;
+    std::vector<uint32_t> seeds;  // a merge: every shard's seed (empty: {seed})
+    std::string shards;           // a merge: JSON list of the merged checkpoints (telescope:shards)
 };
+
+// The checkpoint of a film rendered as `info` says.
+Checkpoint checkpointOf(const Film& film, const OutputInfo& info);
 
 // The EXR (estimate, base, correction and its parts, variance; metadata: scene, seed, spp,
 // device, timings), the PNG preview and the checkpoint, as `telescope render` writes them.

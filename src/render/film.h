@@ -33,7 +33,7 @@ public:
 
     // Samples of a pixel: spp, or, when pixels complete samples at their own pace (photon mapping's
     // per_pixel schedule, setPerPixelCounts), the count the render kept in w of kChannelEstimateSq.
-    // Checkpoints do not record the flag: a per_pixel render is not resumable as such.
+    // Checkpoints (version 2) record the flag.
     double samplesOf(size_t pixel) const;
     // Pixels keep their own sample counts (0 samples reads as 0, never as spp).
     void setPerPixelCounts(bool on) { perPixelCounts_ = on; }

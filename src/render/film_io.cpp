@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 
 namespace telescope {
@@ -14,7 +15,9 @@ namespace telescope {
 namespace {
 
 constexpr char kMagic[16] = "TELESCOPE-FILM\x01";  // 15 characters and the terminating zero
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;
+constexpr uint32_t kFlagPerPixelCounts = 1;
+constexpr uint32_t kMaxSeeds = 1u << 20;
 
 template <typename T>
 void put(std::ostream& out, const T& v) {
@@ -53,10 +56,7 @@ private:
 }  // namespace
 
 void saveCheckpoint(const std::string& path, const Checkpoint& c) {
-    std::string tmp = path + ".partial";
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        if (!out) throw std::runtime_error(fmt::format("{}: cannot write checkpoint", path));
+    writeStreamAtomically(path, [&](std::ostream& out) {
         out.write(kMagic, sizeof(kMagic));
         put(out, kVersion);
         put(out, c.film.width());
@@ -66,40 +66,86 @@ void saveCheckpoint(const std::string& path, const Checkpoint& c) {
         put(out, c.seed);
         putString(out, c.scene);
         putString(out, c.estimator);
+        putString(out, c.settings);
+        const std::vector<uint32_t> seeds = c.seeds.empty() ? std::vector<uint32_t>{c.seed} : c.seeds;
+        put(out, uint32_t(seeds.size()));
+        for (uint32_t s : seeds) put(out, s);
+        put(out, c.film.perPixelCounts() ? kFlagPerPixelCounts : 0u);
         for (uint32_t ch = 0; ch < shader::kChannelCount; ++ch) {
             const auto& sums = c.film.sums(ch);
             out.write(reinterpret_cast<const char*>(sums.data()), std::streamsize(sums.size() * sizeof(sums[0])));
         }
-        if (!out.flush()) {
-            out.close();
-            std::filesystem::remove(tmp);
-            throw std::runtime_error(fmt::format("{}: checkpoint write failed", path));
-        }
+    });
+}
+
+namespace {
+
+// Reads everything before the pixel sums.
+CheckpointHeader readHeader(std::istream& in, Reader& r, const std::string& path) {
+    char magic[sizeof(kMagic)];
+    if (!in.read(magic, sizeof(magic)) || std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) r.fail("the header");
+    const uint32_t version = r.get<uint32_t>("the version");
+    if (version != 1 && version != kVersion)
+        throw InputError(path, "", fmt::format("unsupported checkpoint version {}", version));
+    CheckpointHeader h;
+    h.width = r.get<uint32_t>("the width");
+    h.height = r.get<uint32_t>("the height");
+    uint32_t channels = r.get<uint32_t>("the channel count");
+    if (channels != shader::kChannelCount)
+        throw InputError(path, "", fmt::format("checkpoint has {} channels, this build keeps {}", channels,
+                                               shader::kChannelCount));
+    if (h.width == 0 || h.height == 0 || uint64_t(h.width) * h.height > (uint64_t(1) << 28))
+        throw InputError(path, "", fmt::format("impossible image size {}x{}", h.width, h.height));
+    h.samplesPerPixel = r.get<uint64_t>("the sample count");
+    h.seed = r.get<uint32_t>("the seed");
+    h.scene = r.getString("the scene", uint64_t(1) << 30);
+    h.estimator = r.getString("the estimator", 1 << 20);
+    if (version >= 2) {
+        h.settings = r.getString("the settings", 1 << 24);
+        const uint32_t n = r.get<uint32_t>("the seed count");
+        if (n == 0 || n > kMaxSeeds) r.fail("the seed count");
+        for (uint32_t i = 0; i < n; ++i) h.seeds.push_back(r.get<uint32_t>("the seeds"));
+        const uint32_t flags = r.get<uint32_t>("the flags");
+        if (flags & ~kFlagPerPixelCounts) r.fail("the flags");
+        h.perPixelCounts = flags & kFlagPerPixelCounts;
+    } else {
+        h.seeds = {h.seed};
     }
-    std::filesystem::rename(tmp, path);
+    return h;
+}
+
+uint64_t sumsBytes(const CheckpointHeader& h) {
+    return uint64_t(h.width) * h.height * shader::kChannelCount * sizeof(glm::dvec4);
+}
+
+}  // namespace
+
+CheckpointHeader readCheckpointHeader(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path, "", "cannot open checkpoint");
+    Reader r(in, path);
+    CheckpointHeader h = readHeader(in, r, path);
+    std::error_code ec;
+    const uint64_t size = std::filesystem::file_size(path, ec);
+    if (ec || size != uint64_t(in.tellg()) + sumsBytes(h)) r.fail("the pixel sums");
+    return h;
 }
 
 Checkpoint loadCheckpoint(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw InputError(path, "", "cannot open checkpoint");
     Reader r(in, path);
-    char magic[sizeof(kMagic)];
-    if (!in.read(magic, sizeof(magic)) || std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) r.fail("the header");
-    if (r.get<uint32_t>("the version") != kVersion) throw InputError(path, "", "unsupported checkpoint version");
-    uint32_t width = r.get<uint32_t>("the width"), height = r.get<uint32_t>("the height");
-    uint32_t channels = r.get<uint32_t>("the channel count");
-    if (channels != shader::kChannelCount)
-        throw InputError(path, "", fmt::format("checkpoint has {} channels, this build keeps {}", channels,
-                                               shader::kChannelCount));
-    if (width == 0 || height == 0 || uint64_t(width) * height > (uint64_t(1) << 28))
-        throw InputError(path, "", fmt::format("impossible image size {}x{}", width, height));
+    const CheckpointHeader h = readHeader(in, r, path);
     Checkpoint c;
-    c.film = Film(width, height);
-    c.film.setSamplesPerPixel(r.get<uint64_t>("the sample count"));
-    c.seed = r.get<uint32_t>("the seed");
-    c.scene = r.getString("the scene", uint64_t(1) << 30);
-    c.estimator = r.getString("the estimator", 1 << 20);
-    for (uint32_t ch = 0; ch < channels; ++ch) {
+    c.film = Film(h.width, h.height);
+    c.film.setSamplesPerPixel(h.samplesPerPixel);
+    c.film.setPerPixelCounts(h.perPixelCounts);
+    c.seed = h.seed;
+    c.scene = h.scene;
+    c.estimator = h.estimator;
+    c.settings = h.settings;
+    c.seeds = h.seeds;
+    for (uint32_t ch = 0; ch < shader::kChannelCount; ++ch) {
         auto& sums = c.film.sums(ch);
         if (!in.read(reinterpret_cast<char*>(sums.data()), std::streamsize(sums.size() * sizeof(sums[0]))))
             r.fail("the pixel sums");

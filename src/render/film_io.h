@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "render/film.h"
 
@@ -16,11 +17,31 @@ struct Checkpoint {
     uint32_t seed = 0;
     std::string scene;      // the scene document (after overrides), as JSON text
     std::string estimator;  // the plan's one-line estimator description
+    // The settings as run (resolvedSettings(): defaults filled in, pmf "auto" resolved), as JSON
+    // text; empty in version-1 checkpoints, which did not record them.
+    std::string settings;
+    // The seeds of the renders whose samples the film holds: {seed} for one render, every
+    // shard's seed for a merge. A merge refuses two checkpoints that share a seed.
+    std::vector<uint32_t> seeds;
 };
 
-// Written to a temporary name and renamed: an interrupted write leaves the old file intact.
+// Written to a temporary name and renamed (core/atomic_file.h): an interrupted write leaves the
+// old file intact. Version 2 adds the settings, the seeds and the film's per-pixel-count flag.
 void saveCheckpoint(const std::string& path, const Checkpoint& checkpoint);
 // Throws InputError naming the file when it is missing, truncated or not a checkpoint.
 Checkpoint loadCheckpoint(const std::string& path);
+
+// What a checkpoint records about itself, without reading its pixel sums (a merge of many
+// large checkpoints checks them all before it holds more than two films in memory). Checks
+// that the file is as long as its header says.
+struct CheckpointHeader {
+    uint32_t width = 0, height = 0;
+    uint64_t samplesPerPixel = 0;
+    uint32_t seed = 0;
+    std::string scene, estimator, settings;
+    std::vector<uint32_t> seeds;
+    bool perPixelCounts = false;
+};
+CheckpointHeader readCheckpointHeader(const std::string& path);
 
 }  // namespace telescope

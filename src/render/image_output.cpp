@@ -19,34 +19,11 @@
 #include <fmt/format.h>
 #include <png.h>
 
+#include "core/atomic_file.h"
+
 namespace telescope {
 
 namespace {
-
-// Temporary file next to the target, with the same extension.
-std::string temporaryPath(const std::string& path) {
-    std::filesystem::path p(path);
-    return (p.parent_path() / ("." + p.stem().string() + ".partial" + p.extension().string())).string();
-}
-
-// Writes the image to a temporary file with `write(tmp)`, then renames it into place; on failure
-// the temporary file is removed and the error names the target.
-template <class Write>
-void writeAtomically(const std::string& path, Write&& write) {
-    std::string tmp = temporaryPath(path);
-    try {
-        write(tmp);
-    } catch (const std::exception& e) {
-        std::remove(tmp.c_str());
-        throw std::runtime_error(fmt::format("{}: write failed: {}", path, e.what()));
-    }
-    std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) {
-        std::remove(tmp.c_str());
-        throw std::runtime_error(fmt::format("{}: cannot move the finished image into place: {}", path, ec.message()));
-    }
-}
 
 float srgbEncode(float linear) {
     float c = std::clamp(std::isfinite(linear) ? linear : 0.0f, 0.0f, 1.0f);
@@ -83,7 +60,7 @@ void writeExr(const std::string& path, const Film& film, const ImageMetadata& me
             px[15 + c] = float(neg[c]);
         }
     }
-    writeAtomically(path, [&](const std::string& tmp) {
+    writeFileAtomically(path, [&](const std::string& tmp) {
         Imf::Header header(width, height);
         header.compression() = Imf::ZIP_COMPRESSION;
         for (const auto& [key, value] : metadata.entries) header.insert(key, Imf::StringAttribute(value));
@@ -110,7 +87,7 @@ void writeSrgbPng(const std::string& path, int width, int height, const std::vec
 void writeRgb8Png(const std::string& path, int width, int height, const std::vector<uint8_t>& data) {
     if (width <= 0 || height <= 0 || data.size() != size_t(width) * size_t(height) * 3)
         throw std::invalid_argument(fmt::format("{}: {} bytes is not a {}x{} RGB image", path, data.size(), width, height));
-    writeAtomically(path, [&](const std::string& tmp) {
+    writeFileAtomically(path, [&](const std::string& tmp) {
         png_image image{};
         image.version = PNG_IMAGE_VERSION;
         image.width = png_uint_32(width);

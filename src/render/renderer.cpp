@@ -117,6 +117,7 @@ void Renderer::render(const RenderRequest& request) {
         double elapsed = secondsSince(start);
         // A time-limited render finishes a sample that takes several units (a block of passes).
         if (timed ? elapsed >= request.timeLimit && !passes_->sampleInProgress() : done >= request.spp) break;
+        if (request.stop && request.stop()) break;
 
         // ---- One batch: several units, one submit ----
         const uint32_t maxUnits = std::min(unitsPerBatch, passes_->maxUnitsPerBatch());

@@ -41,6 +41,9 @@ struct RenderRequest {
     uint64_t spp = 0;          // samples per pixel to add (used when timeLimit is 0)
     double timeLimit = 0.0;    // seconds; renders whole dispatches until it is reached
     std::function<void(const RenderProgress&)> progress;  // called after every batch
+    // Asked before every batch: true ends the render there (a signal). A photon block in
+    // progress is abandoned; every completed sample stays in the film.
+    std::function<bool()> stop;
 };
 
 struct PassStats {

@@ -64,6 +64,14 @@ json::json_pointer overridePointer(const std::string& key, const std::string& sc
 }
 
 void applyOverride(json& doc, const SceneOverride& o, const std::string& sceneName) {
+    // The key and a bare-string value enter the document, which must stay valid UTF-8 to be
+    // written out (fuzz/regressions/set-value-invalid-utf8.bin).
+    try {
+        (void)json(o.key + o.value).dump();
+    } catch (const json::type_error&) {
+        throw InputError("", "--set", fmt::format("the override of '{}' is not valid UTF-8 text",
+                                                  json(o.key).dump(-1, ' ', false, json::error_handler_t::replace)));
+    }
     json::json_pointer at;  // the part of the path walked so far
     std::string walked;     // the same, as a key path for messages
     for (const KeyToken& t : parseKeyPath(o.key, sceneName)) {

@@ -15,9 +15,9 @@
 #include "render/image_output.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
-#include "scene/settings_json.h"
+#include "core/atomic_file.h"
 #include "render/pmf_pilot.h"
-#include "study/study_files.h"
+#include "scene/settings_json.h"
 
 namespace fs = std::filesystem;
 

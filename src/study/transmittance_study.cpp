@@ -15,7 +15,7 @@
 #include "gpu/pipeline.h"
 #include "shared/transmittance_estimators.h"
 #include "shared/transmittance_study.h"
-#include "study/study_files.h"
+#include "core/atomic_file.h"
 
 namespace fs = std::filesystem;
 
