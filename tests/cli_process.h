@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+
 #include "render/film_io.h"
 
 namespace telescope::test {
@@ -22,6 +24,27 @@ struct CommandResult {
 CommandResult runTelescope(const std::string& args, const std::filesystem::path& scratch);
 // Runs a shell command line; its stderr is returned.
 CommandResult runShell(const std::string& command, const std::filesystem::path& scratch);
+
+std::string sourcePath(const std::string& relative);  // render_harness.h
+
+// A fixture with a fresh scratch directory per test (TMP/telescope-PREFIX-TESTNAME), removed after.
+class ScratchTest : public ::testing::Test {
+protected:
+    explicit ScratchTest(std::string prefix) : prefix_(std::move(prefix)) {}
+    void SetUp() override {
+        dir_ = std::filesystem::temp_directory_path() /
+               ("telescope-" + prefix_ + "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        std::filesystem::remove_all(dir_);
+        std::filesystem::create_directories(dir_);
+    }
+    void TearDown() override { std::filesystem::remove_all(dir_); }
+    std::string out(const std::string& name) const { return (dir_ / name).string(); }
+    std::string scene() const { return sourcePath("scenes/tungsten/cornell-box/scene.json"); }
+    CommandResult run(const std::string& args) { return runTelescope(args, dir_); }
+
+    std::string prefix_;
+    std::filesystem::path dir_;
+};
 
 // `telescope ARGS` in the background, stderr to `stderrFile`; killed (SIGKILL) when the object
 // goes out of scope unless waited for, so a failed test leaves no render running.

@@ -29,18 +29,9 @@ const char* kSmall = " --set camera.resolution=[32,24] --set integrator.max_boun
 const char* kEndless = " --spp 10000000";
 constexpr double kTimeout = 300.0;  // seconds: a bound against hangs, never reached when correct
 
-class Faults : public ::testing::Test {
+class Faults : public ScratchTest {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("telescope-faults-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-    std::string out(const std::string& name) const { return (dir_ / name).string(); }
-    std::string scene() const { return sourcePath("scenes/tungsten/cornell-box/scene.json"); }
-    CommandResult run(const std::string& args) { return runTelescope(args, dir_); }
+    Faults() : ScratchTest("faults") {}
 
     // No temporary file of an atomic write is left in the directory.
     void expectNoPartialFiles() {
@@ -83,7 +74,6 @@ protected:
         EXPECT_GT(largestRelativeDifference(control, whole, floor), 100 * tolerance) << "the control passed";
     }
 
-    fs::path dir_;
 };
 
 }  // namespace

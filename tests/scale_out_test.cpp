@@ -25,18 +25,9 @@ namespace {
 
 const char* kSmall = " --set camera.resolution=[32,24] --set integrator.max_bounces=2 -q";
 
-class ScaleOut : public ::testing::Test {
+class ScaleOut : public ScratchTest {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("telescope-scale-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-    std::string out(const std::string& name) const { return (dir_ / name).string(); }
-    std::string scene() const { return sourcePath("scenes/tungsten/cornell-box/scene.json"); }
-    CommandResult run(const std::string& args) { return runTelescope(args, dir_); }
+    ScaleOut() : ScratchTest("scale") {}
 
     void render(uint32_t seed, uint64_t spp, const std::string& name, const std::string& extra = "") {
         CommandResult r = run("render " + scene() + kSmall + extra + " --seed " + std::to_string(seed) + " --spp " +
@@ -55,7 +46,6 @@ protected:
         EXPECT_EQ(filesIn(dir_), before);
     }
 
-    fs::path dir_;
 };
 
 // The shards' sums added in order of their seeds, as the merge must.

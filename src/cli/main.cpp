@@ -47,17 +47,19 @@ int main(int argc, char** argv) {
         cmd->add_flag("--no-png", o.noPng, "Do not write a PNG preview");
         cmd->add_option("--checkpoint", o.checkpointPath, checkpointHelp);
     };
+    // The budget of a render: --spp or --time, not both.
+    auto addBudget = [](CLI::App* cmd, uint64_t& spp, double& seconds, const char* sppHelp, const char* timeHelp) {
+        auto* sppOpt = cmd->add_option("--spp", spp, sppHelp)->check(CLI::PositiveNumber);
+        cmd->add_option("--time", seconds, timeHelp)->check(CLI::PositiveNumber)->excludes(sppOpt);
+    };
 
     // ---- render ----
     RenderOptions renderOptions;
     auto* render = app.add_subcommand("render", "Render a scene to a float EXR and a PNG preview");
     addCommon(render);
     addImageOutput(render, renderOptions.output, "Also write the exact render state here (to resume or merge)");
-    auto* sppOpt = render->add_option("--spp", renderOptions.spp, "Samples per pixel (default: renderer.spp)")
-                       ->check(CLI::PositiveNumber);
-    render->add_option("--time", renderOptions.timeLimit, "Render for this many seconds instead of a fixed spp")
-        ->check(CLI::PositiveNumber)
-        ->excludes(sppOpt);
+    addBudget(render, renderOptions.spp, renderOptions.timeLimit, "Samples per pixel (default: renderer.spp)",
+              "Render for this many seconds instead of a fixed spp");
     auto* seedOpt = render->add_option("--seed", renderOptions.seed, "Random seed");
     render->add_option("--stats-json", renderOptions.statsPath, "Write per-pass times, dispatch counts and device here");
     render->add_option("--resume", renderOptions.resumePath,
@@ -72,11 +74,7 @@ int main(int argc, char** argv) {
         "reference", "Render an unbiased reference, resumable: rerunning continues from OUT.exr.checkpoint");
     addCommon(reference);
     addImageOutput(reference, referenceOptions.output, "Checkpoint file (default: OUT.exr.checkpoint)");
-    auto* refSpp = reference->add_option("--spp", referenceOptions.spp, "Samples per pixel to add")
-                       ->check(CLI::PositiveNumber);
-    reference->add_option("--time", referenceOptions.timeLimit, "Seconds to add")
-        ->check(CLI::PositiveNumber)
-        ->excludes(refSpp);
+    addBudget(reference, referenceOptions.spp, referenceOptions.timeLimit, "Samples per pixel to add", "Seconds to add");
     reference->add_option("--seed", referenceOptions.seed, "Random seed");
     reference->add_option("--checkpoint-every,--checkpoint-interval", referenceOptions.checkpointInterval,
                           "Seconds between checkpoints (default 30)")
