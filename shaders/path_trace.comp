@@ -138,11 +138,14 @@ void main() {
     LevelPmf pmf = LevelPmf(kPmfType, kPmfR, kPmfAlpha);
     if (pc.sampleCount == 0u) return;
     SampleSums sums = sampleSumsZero();
+    // pmf pilot: its own sums (kPilot*), D_j and I(k) of the same paths, and the rays traced.
+    vec3 pilotD = vec3(0.0), pilotD2 = vec3(0.0), pilotBase = vec3(0.0), pilotBase2 = vec3(0.0);
+    float pilotRays = 0.0, pilotDropped = 0.0;
 
     uint s = 0u;
     Rng rng;
     PathState path = startSample(pixel, pixelIndex, s, pmf, rng);
-    float rays = 0.0;  // pmf pilot: rays traced by this sample, the pilot's cost model
+    float rays = 0.0;
     while (true) {
         if (kPilot) rays += 1.0;
         if (pathStep(path, pmf, rng)) continue;
@@ -151,20 +154,27 @@ void main() {
         if (!kPilot) {
             sampleSumsAdd(sums, path.result.base, path.result.correction);
         } else if (!isFiniteVec(path.result.correction) || !isFiniteVec(path.result.base)) {
-            sums.dropped += 1.0;
+            pilotDropped += 1.0;
         } else {
-            // pmf pilot, channels: estimate D_j, estimate^2, base = (rays traced, 0, 0),
-            // correction+ = I(k), correction- = I(k)^2 (the film has no other use for them here).
-            vec3 d = path.result.correction;
-            sums.z += d;
-            sums.z2 += d * d;
-            sums.base += vec3(rays, 0.0, 0.0);
-            sums.correctionPos += path.result.base;
-            sums.correctionNeg += path.result.base * path.result.base;
+            vec3 d = path.result.correction, b = path.result.base;
+            pilotD += d;
+            pilotD2 += d * d;
+            pilotBase += b;
+            pilotBase2 += b * b;
+            pilotRays += rays;
         }
         rays = 0.0;
         if (++s == pc.sampleCount) break;
         path = startSample(pixel, pixelIndex, s, pmf, rng);
+    }
+    if (kPilot) {
+        AccumRef pilot = AccumRef(uvec2(pc.pilotAddressLo, pc.pilotAddressHi));
+        accumulateAdd(pilot, kPilotCorrection, pixelIndex, pixelCount, vec4(pilotD, pilotDropped));
+        accumulateAdd(pilot, kPilotCorrectionSq, pixelIndex, pixelCount, vec4(pilotD2, 0.0));
+        accumulateAdd(pilot, kPilotBase, pixelIndex, pixelCount, vec4(pilotBase, 0.0));
+        accumulateAdd(pilot, kPilotBaseSq, pixelIndex, pixelCount, vec4(pilotBase2, 0.0));
+        accumulateAdd(pilot, kPilotRays, pixelIndex, pixelCount, vec4(pilotRays, 0.0, 0.0, 0.0));
+        return;
     }
     accumulateSums(AccumRef(uvec2(pc.accumAddressLo, pc.accumAddressHi)), pixelIndex, pixelCount, sums);
 }

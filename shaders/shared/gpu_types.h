@@ -140,7 +140,17 @@ struct PathTracePush {
     uint pilotLevel;    // pmf pilot only (kSpecPilot): the fixed level m = j - k
     uint queueAddressLo; uint queueAddressHi;  // level queue (kLevelScheduleQueued only)
     uint queueCapacity;                        // items the level queue holds
+    uint pilotAddressLo; uint pilotAddressHi;  // pmf pilot only: its result buffer (kPilot*)
 };
+
+// The pmf pilot's result buffer (render/pmf_pilot.h): per pixel, compensated (hi, lo) sums of
+// its own channels, laid out like the film's: index of the hi part = (channel * pixels + pixel) * 2.
+CONST uint kPilotCorrection = 0u;     // rgb: sum of the unweighted correction D_j; w: non-finite samples
+CONST uint kPilotCorrectionSq = 1u;   // rgb: sum of D_j^2
+CONST uint kPilotBase = 2u;           // rgb: sum of the base I(k) of the same paths
+CONST uint kPilotBaseSq = 3u;         // rgb: sum of I(k)^2
+CONST uint kPilotRays = 4u;           // x: rays traced (the pilot's cost model)
+CONST uint kPilotChannelCount = 5u;
 
 // ---- Level scheduling (docs/ESTIMATORS.md section 1; issue "level scheduling") ----
 // per_pixel: each lane traces its own pixel's samples, each sample with its own level (the
@@ -175,7 +185,7 @@ CONST uint kChannelCount = 6u;
 
 SHADER_NAMESPACE_END
 #ifdef __cplusplus
-static_assert(sizeof(telescope::shader::PathTracePush) == 96);
+static_assert(sizeof(telescope::shader::PathTracePush) == 104);
 #endif
 
 // ---- Photon mapping passes (photon_trace, hash_grid_build, gather; docs/ESTIMATORS.md section 3) ----

@@ -153,6 +153,13 @@ public:
         push_.pilotLevel = plan.pilotLevel;
         push_.accumAddressLo = uint32_t(b.accum->address());
         push_.accumAddressHi = uint32_t(b.accum->address() >> 32);
+        pixels_ = size_t(cam.width) * cam.height;
+        if (plan.pilotLevel != kNoPilotLevel) {
+            pilot_ = gpu::Buffer(context, pixels_ * shader::kPilotChannelCount * 2 * sizeof(glm::vec4), "pmf pilot sums");
+            pilot_.fill(0);
+            push_.pilotAddressLo = uint32_t(pilot_.address());
+            push_.pilotAddressHi = uint32_t(pilot_.address() >> 32);
+        }
         groupsX_ = (cam.width + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
         groupsY_ = (cam.height + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
         // About a million paths per dispatch, at most 16 samples per pixel in one thread.
@@ -180,6 +187,22 @@ public:
     void setPilotLevel(uint32_t level) override {
         if (push_.pilotLevel == kNoPilotLevel) throw std::logic_error("setPilotLevel on a render that is not a pilot");
         push_.pilotLevel = level;
+        pilot_.fill(0);
+    }
+
+    PilotSums pilotSums(uint64_t samples) const override {
+        if (!pilot_.valid()) throw std::logic_error("pilotSums on a render that is not a pilot");
+        const std::vector<glm::vec4> raw = pilot_.downloadAll<glm::vec4>();
+        PilotSums out;
+        out.samples = samples;
+        for (uint32_t c = 0; c < shader::kPilotChannelCount; ++c) {
+            out.sums[c].resize(pixels_);
+            for (size_t i = 0; i < pixels_; ++i) {
+                const size_t hi = (c * pixels_ + i) * 2;
+                out.sums[c][i] = glm::dvec4(raw[hi]) + glm::dvec4(raw[hi + 1]);
+            }
+        }
+        return out;
     }
 
     void recordWarmUp(gpu::CommandBatch& batch) override {
@@ -241,6 +264,8 @@ private:
 
     std::unique_ptr<gpu::ComputePipeline> levelCount_, levelScan_, levelScatter_, pathResolve_;
     gpu::Buffer levelQueue_;
+    gpu::Buffer pilot_;  // pmf pilot only: kPilot* sums
+    size_t pixels_ = 0;
     gpu::ComputePipeline pipeline_;
     shader::PathTracePush push_{};
     uint32_t groupsX_ = 1, groupsY_ = 1, samplesPerUnit_ = 1;

@@ -235,15 +235,16 @@ PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t
         RenderRequest req;
         req.spp = m == 0 ? std::max<uint32_t>(spp, 2) : spp;  // the base variance needs two samples
         r.render(req);
-        const Film film = r.film();
-        const double n = double(film.samplesPerPixel());
+        const PilotSums sums = r.pilotSums();
+        const double n = double(sums.samples);
+        const size_t pixelCount = sums.sums[shader::kPilotBase].size();
         if (m == 0) {
             // ---- The base I(k) (the same paths at every level): per-pixel weights and variance ----
-            pixels = double(film.pixelCount());
-            weight.resize(film.pixelCount());
-            for (size_t i = 0; i < film.pixelCount(); ++i) {
-                const glm::dvec3 b = film.mean(shader::kChannelCorrectionPositive, i);
-                const glm::dvec3 b2 = film.mean(shader::kChannelCorrectionNegative, i);
+            pixels = double(pixelCount);
+            weight.resize(pixelCount);
+            for (size_t i = 0; i < pixelCount; ++i) {
+                const glm::dvec3 b = sums.mean(shader::kPilotBase, i);
+                const glm::dvec3 b2 = sums.mean(shader::kPilotBaseSq, i);
                 weight[i] = 1.0 / (b * b + kWeightEpsilon);
                 const glm::dvec3 v = glm::max(b2 - b * b, glm::dvec3(0.0)) * (n / (n - 1.0)) * weight[i];
                 result.baseVariance += (v.x + v.y + v.z) / (3.0 * pixels);
@@ -252,12 +253,12 @@ PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t
         PilotLevel level;
         level.level = m;
         double sumSq = 0.0;
-        for (size_t i = 0; i < film.pixelCount(); ++i) {
-            glm::dvec3 m2 = film.mean(shader::kChannelEstimateSq, i) * weight[i];
+        for (size_t i = 0; i < pixelCount; ++i) {
+            glm::dvec3 m2 = sums.mean(shader::kPilotCorrectionSq, i) * weight[i];
             const double value = (m2.x + m2.y + m2.z) / 3.0;
             level.secondMoment += value / pixels;
             sumSq += value * value;
-            level.raysPerPath += film.mean(shader::kChannelBase, i).x / pixels;
+            level.raysPerPath += sums.mean(shader::kPilotRays, i).x / pixels;
         }
         // Pixels are independent: the spread of their values bounds the error of the mean.
         const double spread = std::sqrt(std::max(0.0, sumSq / pixels - level.secondMoment * level.secondMoment));

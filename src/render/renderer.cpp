@@ -75,6 +75,12 @@ void SamplePasses::setPilotLevel(uint32_t) {
     throw std::logic_error("this integrator has no pmf pilot");
 }
 
+PilotSums SamplePasses::pilotSums(uint64_t) const {
+    throw std::logic_error("this integrator has no pmf pilot");
+}
+
+PilotSums Renderer::pilotSums() const { return passes_->pilotSums(sampleIndex_); }
+
 void Renderer::restartAtPilotLevel(uint32_t level) {
     passes_->setPilotLevel(level);
     accum_.fill(0);

@@ -86,6 +86,8 @@ public:
     // film at another fixed level, with the same pipelines and the same random numbers (sample
     // indices restart at 0). Stats restart too, except the setup time.
     void restartAtPilotLevel(uint32_t level);
+    // The pmf pilot only: its own sums (D_j, D_j^2, the base I(k) and its square, rays traced).
+    PilotSums pilotSums() const;
     // Starts again from an empty film with another camera of the same resolution and field of
     // view (the viewer's orbit): sample indices restart at 0 and stats restart, except the setup
     // time. No new pipelines. Returns false (and changes nothing) when the integrator cannot

@@ -7,8 +7,10 @@
 // a batch that must be repeated (photon buffers grown) has added nothing to the accumulation.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "gpu/buffer.h"
 #include "gpu/context.h"
@@ -18,6 +20,16 @@
 #include "shared/camera.h"
 
 namespace telescope {
+
+// The pmf pilot's result buffer read back (shared/gpu_types.h kPilot*): per channel and pixel the
+// sum over the pilot's samples, in double.
+struct PilotSums {
+    uint64_t samples = 0;  // per pixel
+    std::array<std::vector<glm::dvec4>, shader::kPilotChannelCount> sums;
+    glm::dvec3 mean(uint32_t channel, size_t pixel) const {
+        return samples ? glm::dvec3(sums[channel][pixel]) / double(samples) : glm::dvec3(0.0);
+    }
+};
 
 // The camera part of a camera pass's push constants (PathTracePush, GatherPush).
 template <class Push>
@@ -69,6 +81,8 @@ public:
     // The pmf pilot's fixed level (a push constant of a pilot plan); integrators without a pilot
     // throw std::logic_error.
     virtual void setPilotLevel(uint32_t level);
+    // The pmf pilot's sums so far (samples: the render's per-pixel count); same as setPilotLevel.
+    virtual PilotSums pilotSums(uint64_t samples) const;
     // Points the camera passes at another camera of the same resolution (a push constant: no new
     // pipelines). Returns false when the integrator cannot, so the caller builds a new Renderer.
     virtual bool setCamera(const Camera&) { return false; }

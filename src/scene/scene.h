@@ -63,7 +63,7 @@ struct TransmittanceModel {
     glm::vec4 paramsB{0.0f};
     float ratio = 0.5f;
     std::string name = "exponential";
-    bool exponential() const { return type == 0; }
+    bool exponential() const { return type == shader::kTrExponential; }
 };
 
 struct DensityGrid {
