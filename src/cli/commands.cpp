@@ -326,13 +326,14 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
             progress(q);
         };
         if (o.timeLimit <= 0) {
-            // Pieces of about checkpointInterval seconds, sized from the speed so far.
+            // Pieces of about checkpointInterval seconds, sized from the speed so far, in whole
+            // units of the renderer (so the sums equal those of one render of the total: the EXR's
+            // metadata reproduces the reference bit for bit). The first piece is one unit: until
+            // then the speed is unknown, and a piece of the whole count would never checkpoint.
+            const uint64_t unit = renderer.samplesPerUnit();
             const double perSample = added > 0 ? before / double(added) : 0.0;
-            // The first piece is one sample: until then the speed is unknown, and a piece of the
-            // whole count would never checkpoint.
-            request.spp = perSample > 0.0 ? std::min<uint64_t>(request.spp, std::max<uint64_t>(
-                                                                                 1, uint64_t(o.checkpointInterval / perSample)))
-                                          : 1;
+            const uint64_t units = perSample > 0.0 ? std::max<uint64_t>(1, uint64_t(o.checkpointInterval / perSample) / unit) : 1;
+            request.spp = std::min<uint64_t>(request.spp, units * unit);
         }
         renderer.render(request);
         elapsed += renderer.stats().wallSeconds - before;

@@ -79,6 +79,8 @@ PilotSums SamplePasses::pilotSums(uint64_t) const {
     throw std::logic_error("this integrator has no pmf pilot");
 }
 
+uint32_t Renderer::samplesPerUnit() const { return passes_->samplesPerUnit(); }
+
 PilotSums Renderer::pilotSums() const { return passes_->pilotSums(sampleIndex_); }
 
 void Renderer::restartAtPilotLevel(uint32_t level) {

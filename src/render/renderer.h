@@ -94,6 +94,9 @@ public:
     // change its camera in place.
     bool restartWithCamera(const Camera& camera);
     const RenderStats& stats() const { return stats_; }
+    // Samples per pixel one dispatch adds at most; renders split at multiples of it add their
+    // samples in the same dispatches as one render of the total, so their sums are bit-identical.
+    uint32_t samplesPerUnit() const;
     uint32_t seed() const { return seed_; }
     // The accumulation on the device (layout: shared/gpu_types.h), for passes that display it
     // while the render runs; samples in it: stats().samplesPerPixel.
