@@ -35,14 +35,14 @@ void pathsPerSecond(benchmark::State& state, const Scene& scene) {
     }
     const double paths = double(state.iterations()) * spp * 256.0 * 256.0;
     state.counters["paths_per_s"] = benchmark::Counter(paths, benchmark::Counter::kIsRate);
-    state.counters["k"] = double(scene.integrator.maxBounces);
+    state.counters["k"] = double(pathDepthK(scene.integrator));
     state.SetLabel(context().info().name);
 }
 
 void pathTracing(benchmark::State& state, const std::string& debias) {
     const int k = int(state.range(0));
     std::vector<SceneOverride> overrides = {{"camera.resolution", "[256,256]"},
-                                            {"integrator.max_bounces", std::to_string(k)}};
+                                            {"integrator.max_bounces", std::to_string(k + 1)}};  // k bounces
     if (!debias.empty())
         overrides.push_back({"integrator.debias", R"({"estimator":")" + debias + R"(","pmf":{"type":"geometric","r":0.65}})"});
     Scene scene = loadScene(std::string(TELESCOPE_SOURCE_DIR) + "/scenes/cornell-box.json", overrides);
@@ -64,7 +64,7 @@ void levelSchedule(benchmark::State& state, const std::string& sceneFile) {
     for (const char* schedule : kSchedules) {
         std::vector<SceneOverride> overrides = {
             {"camera.resolution", "[256,256]"},
-            {"integrator.max_bounces", "1"},
+            {"integrator.max_bounces", "2"},
             {"integrator.debias", std::string(R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.3},)") +
                                       R"("level_schedule":")" + schedule + R"("})"}};
         scenes.push_back(loadScene(std::string(TELESCOPE_SOURCE_DIR) + "/scenes/" + sceneFile, overrides));

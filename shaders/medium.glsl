@@ -40,6 +40,7 @@ float gridDensityAt(uint mi, vec3 p) {
 
 #define TR_GRID_DENSITY(s, t) gridDensityAt((s).medium, (s).origin + (s).dir * (t))
 #include "shared/transmittance_estimators.h"
+#include "shared/free_flight.h"
 
 // The model of medium mi; when every medium of the scene has the same simple model its type is a
 // specialisation constant, so the compiler keeps only that model's code.
@@ -103,7 +104,18 @@ TrEstimator sceneTrEstimator() {
 }
 
 // Estimated transmittance of medium mi over [0, l] with the form of the endpoint types.
+// Homogeneous media with a comb estimator (ray marching, debiased or unbiased ray marching): every
+// comb of a constant density sees the exact optical depth, so every comb estimator returns
+// g(sigma_t density l) exactly (debiased marching: the correction is exactly 0); it is returned
+// without marching. Besides the work, marching would only add rounding: at a kink or step of g
+// (linear, pulse) the sub-comb depths can round to opposite sides, and the correction divides
+// that difference by p(j). The trackers stay stochastic (what the scene asked for).
 vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, bool endOnSurface, inout Rng rng) {
+    if (media[mi].type == kMediumHomogeneous &&
+        (kTrEstimatorType == kTrEstRayMarch || kTrEstimatorType == kTrEstDebiasedRayMarch ||
+         kTrEstimatorType == kTrEstUnbiasedRayMarch))
+        return trForm3(mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
+                       media[mi].sigmaT * (media[mi].density * max(l, 0.0)));
     uint lookups = 0u;
     return trEstimate(sceneTrEstimator(), mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
                       mediumSegment(mi, o, d, l), rng, lookups);
@@ -180,24 +192,21 @@ vec3 samplePhaseHG(vec3 dir, float g, float u1, float u2) {
 
 float mediumPhaseG(uint mi) { return media[mi].phase == kPhaseHenyeyGreenstein ? media[mi].phaseG : 0.0; }
 
-// ---- Free-flight guide: optical depth drawn from the model's own free flight ----
-// Inverts 1 - F(tau) = u with F = T_ss (from a surface) or T_sm (from a medium point).
-float sampleGuideDepth(TrModel model, bool fromSurface, float u) {
-    if (model.type == kTrExponential) return -log(1.0 - u);
-    if (model.type == kTrDavis) {
-        float a = model.a.x;
-        return a * (pow(1.0 - u, -1.0 / (fromSurface ? a : a + 1.0)) - 1.0);
-    }
-    uint form = fromSurface ? kFormSurfaceSurface : kFormSurfaceMedium;
-    float target = 1.0 - u;
-    float lo = 0.0, hi = 1.0;
-    for (uint i = 0u; i < 64u && trForm(model, form, hi) > target; ++i) hi *= 2.0;
-    for (uint i = 0u; i < 32u; ++i) {
-        float mid = 0.5 * (lo + hi);
-        if (trForm(model, form, mid) > target) lo = mid;
-        else hi = mid;
-    }
-    return 0.5 * (lo + hi);
+// ---- Dirac free flights: linear and pulse from a medium point ----
+// From a medium point the free flight of `linear` is a Dirac at tau = max_t, that of `pulse` a
+// comb of n Diracs of mass 1/n at tau_i = min + (i + 1/2) (max - min) / n (Tungsten's
+// mediumMedium; sampleMedium draws them). True for simple models of those types.
+// A segment of length l from a medium point of homogeneous medium mi whose model is a Dirac free
+// flight (shared/free_flight.h: sampleDiracFlight).
+bool sampleDiracSegment(uint mi, vec3 o, vec3 d, float l, inout vec3 throughput, out vec3 p, inout Rng rng) {
+    float uc = rngNext(rng), ud = rngNext(rng);
+    float t;
+    vec3 weight;
+    bool scattered = sampleDiracFlight(mediumModel(mi), media[mi].sigmaT * media[mi].density,
+                                       media[mi].sigmaS * media[mi].density, l, uc, ud, t, weight);
+    p = o + d * t;
+    throughput *= weight;
+    return scattered;
 }
 
 // One camera segment of length l through medium mi. Returns true when the path scatters in the
@@ -207,6 +216,9 @@ bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, ino
                          inout Rng rng) {
     p = o;
     TrModel model = mediumModel(mi);
+    if (!fromSurface && media[mi].type == kMediumHomogeneous && trModelIsDirac(model) &&
+        trMaxComponent(media[mi].sigmaS) > 0.0)
+        return sampleDiracSegment(mi, o, d, l, throughput, p, rng);
     TrSegment whole = mediumSegment(mi, o, d, l);
     // The guide works on the part of [0, l] with density (grids: the box).
     float t0 = (kHasGrids && media[mi].type == kMediumGrid) ? dot(whole.origin - o, d) : 0.0;

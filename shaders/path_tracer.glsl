@@ -52,13 +52,14 @@ vec3 sampleDirectLambert(vec3 p, vec3 ng, vec3 n, vec3 albedo, uint medium, inou
 }
 
 // Next-event estimation from a scattering point p in medium mi (index), travelling along dir:
-// the phase function instead of the BSDF, MIS against phase sampling.
-vec3 sampleDirectMedium(vec3 p, vec3 dir, uint mi, inout Rng rng, out uint crossings) {
+// the phase function instead of the BSDF, MIS against phase sampling (withMis false: the path ends
+// here, so no phase-sampled ray will find the light and light sampling takes the whole weight).
+vec3 sampleDirectMedium(vec3 p, vec3 dir, uint mi, bool withMis, inout Rng rng, out uint crossings) {
     crossings = 0u;
     LightSample ls;
     if (!sampleLight(p, rng, ls)) return vec3(0.0);
     float phase = phaseHG(dot(dir, ls.wi), mediumPhaseG(mi));
-    float mis = ls.pdf > 0.0 ? powerHeuristic(ls.pdf, phase) : 1.0;
+    float mis = (withMis && ls.pdf > 0.0) ? powerHeuristic(ls.pdf, phase) : 1.0;
     return ls.weight * phase * mis * shadowTransmittance(p, ls.wi, ls.dist, mi + 1u, false, rng, crossings);
 }
 
@@ -78,6 +79,7 @@ struct PathState {
     uint medium;        // participating medium the ray travels in, index + 1 (0 = vacuum)
     bool fromSurface;   // the last vertex is a surface (or the camera), not a medium point
     vec3 lastVertex;    // the last scattering vertex (for light pdfs across forward surfaces)
+    uint mediumScatters;  // medium scattering events since the last surface (Tungsten's MediumState::bounce)
 };
 
 PathState beginPath(vec3 origin, vec3 dir, uint level) {
@@ -95,6 +97,7 @@ PathState beginPath(vec3 origin, vec3 dir, uint level) {
     s.medium = kCameraMedium;
     s.fromSurface = true;
     s.lastVertex = origin;
+    s.mediumScatters = 0u;
     return s;
 }
 
@@ -102,17 +105,24 @@ PathState beginPath(vec3 origin, vec3 dir, uint level) {
 // in the medium (the state is advanced to the next vertex), 2 the path ends ----
 uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng) {
     uint mi = s.medium - 1u;
+    // The medium's own limit (its max_bounces, Tungsten's sampleDistance): no free flight after
+    // more than max_bounces scattering events in a row.
+    if (s.mediumScatters > media[mi].maxBounces) return 2u;
     vec3 p;
     bool scattered = sampleMediumSegment(mi, s.origin, s.dir, tHit, s.fromSurface, s.throughput, p, rng);
     if (s.throughput == vec3(0.0)) return 2u;
     if (!scattered) return 0u;
     uint v = s.vertex;
     if (v > s.limit) return 2u;
+    s.mediumScatters += 1u;
+    // This vertex's phase-sampled ray will not be traced when the medium limit ends the path next.
+    bool last = s.mediumScatters > media[mi].maxBounces;
     if (kLightSampling && kLightCount > 0u) {
         uint crossings;
-        vec3 direct = sampleDirectMedium(p, s.dir, mi, rng, crossings);
+        vec3 direct = sampleDirectMedium(p, s.dir, mi, !last, rng, crossings);
         addContribution(s.result, v + crossings, s.throughput * direct, pmf, s.level);
     }
+    if (last) return 2u;
     // Phase sampling: the phase function is sampled exactly, so the weight is 1.
     float g = mediumPhaseG(mi);
     float u1 = rngNext(rng), u2 = rngNext(rng);
@@ -176,6 +186,7 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         s.medium = mediumAcross(hit.prim, ng, s.dir, s.medium);
         s.origin = offsetRayOrigin(p, ng, s.dir);
         s.fromSurface = true;
+        s.mediumScatters = 0u;
         s.vertex = v + 1u;
         return true;
     }
@@ -220,6 +231,7 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         s.medium = mediumAcross(hit.prim, ng, s.dir, s.medium);
         s.fromSurface = true;
         s.lastVertex = p;
+        s.mediumScatters = 0u;
     }
     return true;
 }

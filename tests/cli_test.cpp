@@ -138,7 +138,7 @@ TEST_F(Cli, RenderWritesExrWithChannelsMetadataAndPreview) {
     std::string exr = out("cb.exr"), stats = out("stats.json");
     CommandResult r = run("render " + test::sourcePath("scenes/furnace.json") + " -o " + exr +
                           " --spp 8 --seed 5 -q --stats-json " + stats +
-                          " --set camera.resolution=[32,24] --set integrator.max_bounces=1"
+                          " --set camera.resolution=[32,24] --set integrator.max_bounces=2"
                           " --set 'integrator.debias={\"estimator\":\"single_term\"}'");
     ASSERT_EQ(r.exitCode, 0) << r.stderrText;
     EXPECT_TRUE(fs::exists(out("cb.png")));
@@ -175,7 +175,7 @@ TEST_F(Cli, RenderWritesExrWithChannelsMetadataAndPreview) {
 TEST_F(Cli, OutputsRecordThePmfTheAutoPilotChose) {
     std::string exr = out("auto.exr"), stats = out("auto.json");
     CommandResult r = run("render " + test::sourcePath("scenes/furnace.json") + " -o " + exr + " --no-png" +
-                          " --spp 2 -q --stats-json " + stats + " --set camera.resolution=[8,8] --set integrator.max_bounces=1"
+                          " --spp 2 -q --stats-json " + stats + " --set camera.resolution=[8,8] --set integrator.max_bounces=2"
                           " --set 'integrator.debias={\"estimator\":\"single_term\",\"pmf\":{\"type\":\"auto\",\"pilot_spp\":1,\"pilot_levels\":3}}'");
     ASSERT_EQ(r.exitCode, 0) << r.stderrText;
     const nlohmann::json j = nlohmann::json::parse(std::ifstream(stats));

@@ -40,7 +40,7 @@ Scene edgeScene(const std::string& filter) {
     j["primitives"] = json::array({emitter});
     j["media"] = json::array();
     j["integrator"].erase("transmittance_estimator");
-    j["integrator"]["max_bounces"] = 0;
+    j["integrator"]["max_bounces"] = 1;  // emitters only
     return loadSceneFromString(j.dump(), "edge", sourcePath("scenes"),
                                {{"camera.resolution", fmt::format("[{},{}]", kWidth, kHeight)},
                                 {"camera.reconstruction_filter", "\"" + filter + "\""}});

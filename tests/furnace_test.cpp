@@ -28,7 +28,7 @@ protected:
 
     static ZSummary check(uint32_t k, const std::string& debias, double expected, uint64_t spp, uint32_t seed) {
         std::vector<SceneOverride> o = {{"camera.resolution", "[32,32]"},
-                                        {"integrator.max_bounces", std::to_string(k)}};
+                                        {"integrator.max_bounces", std::to_string(k + 1)}};  // k bounces
         if (!debias.empty()) o.push_back({"integrator.debias", debias});
         Film film = renderFilm(loadTestScene("scenes/furnace.json", o), spp, seed);
         EXPECT_EQ(film.nonFiniteSamples(), 0u);

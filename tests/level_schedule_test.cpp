@@ -17,7 +17,7 @@ namespace {
 Scene cornell(const std::string& schedule, const std::string& resolution = "[24,20]") {
     return loadTestScene("scenes/cornell-box.json",
                          {{"camera.resolution", resolution},
-                          {"integrator.max_bounces", "1"},
+                          {"integrator.max_bounces", "2"},
                           {"integrator.debias", R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.4},)"
                                                 R"("level_schedule":")" + schedule + R"("})"}});
 }
@@ -61,7 +61,7 @@ namespace {
 // sample indices are independent: each batch mean is one independent sample.
 std::vector<glm::dvec3> uniformBatchMeans(const std::string& debias, uint32_t batches, uint64_t spp, uint32_t seed) {
     Scene scene = loadTestScene("scenes/furnace.json", {{"camera.resolution", "[8,8]"},
-                                                        {"integrator.max_bounces", "1"},
+                                                        {"integrator.max_bounces", "2"},
                                                         {"integrator.debias", debias}});
     Renderer renderer(sharedContext(), scene, seed);
     std::vector<glm::dvec3> means;

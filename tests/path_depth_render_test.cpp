@@ -41,7 +41,7 @@ protected:
 
     static Scene cornell(uint32_t k, const std::string& debias = "", const std::string& resolution = "[64,48]") {
         std::vector<SceneOverride> o = {{"camera.resolution", resolution},
-                                        {"integrator.max_bounces", std::to_string(k)}};
+                                        {"integrator.max_bounces", std::to_string(k + 1)}};  // k bounces
         if (!debias.empty()) o.push_back({"integrator.debias", debias});
         return loadTestScene(kCornell, o);
     }

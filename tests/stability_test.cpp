@@ -119,7 +119,7 @@ protected:
 void furnaceAtScale(double s) {
     json j = scaled(readJson("scenes/furnace.json"), s);
     Scene scene = sceneFromJson(j, "furnace x" + std::to_string(s),
-                                {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "1"},
+                                {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "2"},
                                  {"integrator.debias", kSingleTerm}});
     Film film = renderFilm(scene, 96, 101);
     const std::string what = "furnace scaled by " + std::to_string(s);
@@ -137,7 +137,7 @@ void pointPlaneAtScale(double s) {
     json j = scaled(readJson("scenes/point-plane.json"), s);
     Scene scene = sceneFromJson(j, "point-plane x" + std::to_string(s),
                                 {{"camera.resolution", "[16,16]"}, {"camera.fov", "2"},
-                                 {"integrator.max_bounces", "1"}});
+                                 {"integrator.max_bounces", "2"}});
     Film film = renderFilm(scene, 4, 7);
     const std::string what = "point-plane scaled by " + std::to_string(s);
     expectFinite(film, what);
@@ -163,7 +163,7 @@ TEST_F(Stability, VeryBrightTinyLight) {
                                {"emission", 1e8},
                                {"transform", {{"position", {0.0, 1.5, 0.0}}, {"scale", 1e-4}}}});
     // No closed form; finite only.
-    Scene scene = sceneFromJson(j, "bright speck", {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "2"},
+    Scene scene = sceneFromJson(j, "bright speck", {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "3"},
                                                      {"integrator.debias", kCornellSingleTerm}});
     expectFinite(renderFilm(scene, 16, 3), "bright tiny light");
 }
@@ -176,7 +176,7 @@ TEST_F(Stability, GrazingCamera) {
     json j = readJson("scenes/point-plane.json");
     j["camera"]["transform"] = {{"position", {0.0, 1e-5, 5.0}}, {"look_at", {0.0, 1e-5, 0.0}}, {"up", {0.0, 1.0, 0.0}}};
     Scene scene = sceneFromJson(j, "grazing", {{"camera.resolution", "[16,16]"}, {"integrator.debias", kSum},
-                                               {"integrator.max_bounces", "1"}});
+                                               {"integrator.max_bounces", "2"}});
     expectFinite(renderFilm(scene, 16, 5), "grazing camera");
 }
 
@@ -184,7 +184,7 @@ TEST_F(Stability, GrazingLight) {
     json j = readJson("scenes/point-plane.json");
     for (auto& p : j["primitives"])
         if (p["type"] == "point") p["transform"]["position"] = {0.0, 1e-6, 0.0};
-    Scene scene = sceneFromJson(j, "grazing light", {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "1"}});
+    Scene scene = sceneFromJson(j, "grazing light", {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "2"}});
     expectFinite(renderFilm(scene, 8, 5), "light grazing the plane");
 }
 
@@ -212,7 +212,7 @@ TEST_F(Stability, DegenerateTriangles) {
         j["primitives"][0] = {{"name", "mesh"}, {"type", "mesh"}, {"file", file.string()}, {"bsdf", "grey"},
                               {"transform", {{"rotation", {-90.0, 0.0, 0.0}}, {"scale", 2.0}}}};
         Scene scene = sceneFromJson(j, "degenerate", {{"camera.resolution", "[16,16]"}, {"integrator.debias", kSingleTerm},
-                                                      {"integrator.max_bounces", "1"}});
+                                                      {"integrator.max_bounces", "2"}});
         return renderFilm(scene, 16, 9);
     };
     const Film withDegenerate = render(obj), quadOnly = render(quad);
@@ -232,7 +232,7 @@ TEST_F(Stability, DegenerateTriangles) {
 
 Film furnaceWithDebias(const std::string& debias, double albedo, uint64_t spp) {
     Scene scene = loadTestScene("scenes/furnace.json", {{"camera.resolution", "[16,16]"},
-                                                        {"integrator.max_bounces", "1"},
+                                                        {"integrator.max_bounces", "2"},
                                                         {"bsdfs[0].albedo", std::to_string(albedo)},
                                                         {"integrator.debias", debias}});
     Film film = renderFilm(scene, spp, 17);
@@ -285,7 +285,7 @@ TEST_F(Stability, AlbedoNearOne) {
 // (Z-test of the image mean; the estimate is bounded).
 Scene mirrorFurnace(uint32_t maxBounces, const std::string& debias) {
     std::vector<SceneOverride> o = {{"camera.resolution", "[16,16]"},
-                                    {"integrator.max_bounces", std::to_string(maxBounces)},
+                                    {"integrator.max_bounces", std::to_string(maxBounces + 1)},  // k = maxBounces
                                     {"bsdfs[0]", R"({"name":"grey","type":"mirror","albedo":0.999})"}};
     if (!debias.empty()) o.push_back({"integrator.debias", debias});
     return loadTestScene("scenes/furnace.json", o);
@@ -317,7 +317,7 @@ TEST_F(Stability, ExtremeIndexOfRefraction) {
     // Two independent renders, Z-test per block and of the image mean (finite variance: r = 0.3 on
     // a Cornell box). Index 20 has no closed form: finite only.
     const std::vector<SceneOverride> settings = {{"camera.resolution", "[32,32]"}, {"integrator.debias", kCornellSingleTerm},
-                                                 {"integrator.max_bounces", "2"}};
+                                                 {"integrator.max_bounces", "3"}};
     const Film empty = renderFilm(sceneFromJson(readJson("scenes/cornell-box.json"), "no ball", settings), 64, 22);
     uint32_t seed = 23;
     for (const char* ior : {"1.0", "1.0001", "20"}) {
@@ -335,7 +335,7 @@ TEST_F(Stability, ExtremeIndexOfRefraction) {
 
 TEST_F(Stability, OddImageSizes) {
     for (const char* res : {"[1,1]", "[7,3]", "[3,17]"}) {
-        Scene scene = loadTestScene("scenes/furnace.json", {{"camera.resolution", res}, {"integrator.max_bounces", "1"},
+        Scene scene = loadTestScene("scenes/furnace.json", {{"camera.resolution", res}, {"integrator.max_bounces", "2"},
                                                             {"integrator.debias", kSingleTerm}});
         Film film = renderFilm(scene, 64, 29);
         expectFinite(film, res);
@@ -349,7 +349,7 @@ TEST_F(Stability, CameraOnASurface) {
     Scene scene = loadTestScene("scenes/furnace.json", {{"camera.resolution", "[16,16]"},
                                                         {"camera.transform.position", "[0,0,-1]"},
                                                         {"camera.transform.look_at", "[0,0,1]"},
-                                                        {"integrator.debias", kSum}, {"integrator.max_bounces", "1"}});
+                                                        {"integrator.debias", kSum}, {"integrator.max_bounces", "2"}});
     Film film = renderFilm(scene, 64, 31);
     expectFinite(film, "camera on the back wall");
     expectValue(film, 2.0, 8, "camera on the back wall");
@@ -358,7 +358,7 @@ TEST_F(Stability, CameraOnASurface) {
 TEST_F(Stability, NoEmissionAnywhere) {
     json j = readJson("scenes/furnace.json");
     for (auto& p : j["primitives"]) p["emission"] = 0.0;
-    Scene scene = sceneFromJson(j, "dark furnace", {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "1"},
+    Scene scene = sceneFromJson(j, "dark furnace", {{"camera.resolution", "[16,16]"}, {"integrator.max_bounces", "2"},
                                                     {"integrator.debias", kSingleTerm}});
     Film film = renderFilm(scene, 8, 37);
     expectFinite(film, "no emission");

@@ -50,7 +50,7 @@ struct MediumGpu {
     vec3 gridMin; uint gridOffset;    // first voxel in the grid-data buffer
     vec3 gridMax; float gridMaxDensity;
     uvec3 gridRes; float gridMinDensity;
-    uint phase; uint pad0; uint pad1; uint pad2;
+    uint phase; uint maxBounces; uint pad1; uint pad2;  // maxBounces: Tungsten's per-medium limit
     TrModel model;
 };
 

@@ -63,6 +63,7 @@ shader::MediumGpu mediumToGpu(const Medium& m, std::vector<float>& gridData) {
     g.unitPoint = m.unitPoint;
     g.phase = uint32_t(m.phase);
     g.phaseG = m.phaseG;
+    g.maxBounces = m.maxBounces;
     g.model.type = m.transmittance.type;
     g.model.typeA = m.transmittance.typeA;
     g.model.typeB = m.transmittance.typeB;

@@ -64,14 +64,14 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
                                         in.debias.pmf.pilotSpp, in.debias.pmf.pilotLevels)});
     if (plan.pilotLevel != kNoPilotLevel) {
         plan.estimator = fmt::format("pmf pilot: unweighted correction D_j at level j = k + {}, k = {}", plan.pilotLevel,
-                                     in.maxBounces);
+                                     pathDepthK(in));
     } else if (in.debias.estimator == DebiasEstimator::None) {
-        plan.estimator = fmt::format("biased path tracing I(k), k = max_bounces = {}", in.maxBounces);
+        plan.estimator = fmt::format("biased path tracing I(k), k = max_bounces - 1 = {}", pathDepthK(in));
     } else {
         plan.estimator = fmt::format(
             "debiased path depth ({} estimator), base k = {}, {}, {}",
             in.debias.estimator == DebiasEstimator::SingleTerm ? "single-term" : "Russian-roulette sum",
-            in.maxBounces,
+            pathDepthK(in),
             in.debias.testPmfWeight == 1.0f ? pmfDescription(in.debias.pmf)
                                             : fmt::format("{} with every 1 / p(j) scaled by {:g} (TEST ONLY, biased)",
                                                           pmfDescription(in.debias.pmf), in.debias.testPmfWeight),
@@ -101,7 +101,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
 
     plan.featuresOf = "path_trace";
     plan.pathTraceSpec = {
-        {kSpecMaxBounces, in.maxBounces},
+        {kSpecMaxBounces, pathDepthK(in)},
         {kSpecMinBounces, in.minBounces},
         {kSpecDebiasMode, uint32_t(in.debias.estimator)},
         {kSpecPmfType, uint32_t(in.debias.pmf.type)},
@@ -115,7 +115,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecTwoSided, in.enableTwoSidedShading},
         {kSpecFilter, filterConstant(scene.camera)},
         {kSpecEnvironmentLight, f.environmentLight},
-        {kSpecMaxTraceDepth, std::max(shader::kTraceDepthCap, in.maxBounces + 1)},
+        {kSpecMaxTraceDepth, std::max(shader::kTraceDepthCap, pathDepthK(in) + 1)},
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
         {kSpecPilot, plan.pilotLevel != kNoPilotLevel},
         {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},

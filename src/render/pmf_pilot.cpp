@@ -217,7 +217,7 @@ PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t
     const PmfSettings settings = sceneIn.integrator.debias.pmf;
     const uint32_t spp = settings.pilotSpp;
     const DebiasEstimator estimator = sceneIn.integrator.debias.estimator;
-    const uint32_t k = sceneIn.integrator.maxBounces;
+    const uint32_t k = pathDepthK(sceneIn.integrator);
     result.levelCap = shader::kTraceDepthCap > k ? shader::kTraceDepthCap - k : 1u;
 
     // ---- One renderer for every level (the level is a push constant: one pipeline compile) ----

@@ -108,7 +108,10 @@ Medium SceneReader::readMedium(const json& v, const std::string& key) {
     }
     std::vector<std::string_view> read = {"name", "type", "sigma_a", "sigma_s", "density", "phase_function", "transmittance",
                                           "max_bounces"};
-    if (find(v, "max_bounces")) ignore(member(key, "max_bounces"));
+    // Tungsten's per-medium limit (HomogeneousMedium::sampleDistance): a path ends when it would
+    // take a free flight after more than max_bounces scattering events in a row in media (the
+    // count restarts at every surface, forward boundaries included).
+    if (const json* b = find(v, "max_bounces")) m.maxBounces = integer(*b, member(key, "max_bounces"), 0, 1u << 20);
 
     if (m.type == MediumType::Exponential) {
         if (const json* f = find(v, "falloff_scale")) {

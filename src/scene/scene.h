@@ -88,6 +88,7 @@ struct Medium {
     PhaseFunction phase = PhaseFunction::Isotropic;
     float phaseG = 0.0f;
     TransmittanceModel transmittance;
+    uint32_t maxBounces = 1024;  // "max_bounces": Tungsten's per-medium limit (docs/MEDIA.md)
 };
 
 enum class TransmittanceEstimatorType : uint32_t {
@@ -195,6 +196,13 @@ struct IntegratorSettings {
 };
 
 inline bool usesPhotons(const IntegratorSettings& s) { return s.type != IntegratorType::PathTracer; }
+
+// The path tracer's depth k: I(k) holds the light of paths with at most k scattering vertices
+// (surface bounces, forward-boundary crossings and medium scattering events). Tungsten's
+// max_bounces counts the light connection too (PathTracer.cpp: next-event estimation runs while
+// bounce < max_bounces - 1; at max_bounces 1 only emitters show), so k = max_bounces - 1. The
+// reader rejects max_bounces 0 for the path tracer (Tungsten renders nothing).
+inline uint32_t pathDepthK(const IntegratorSettings& s) { return s.maxBounces > 0 ? s.maxBounces - 1 : 0; }
 
 struct RendererSettings {
     uint32_t spp = 32;

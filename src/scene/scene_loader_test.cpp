@@ -562,6 +562,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"MaxBouncesString", R"({"integrator": {"max_bounces": "64"}})", "", "integrator.max_bounces", "expected an integer"},
         BadInput{"MaxBouncesTooLarge", R"({"integrator": {"max_bounces": 5000}})", "", "integrator.max_bounces", "expected an integer in [0, 1024]"},
         BadInput{"LightSamplingNotBool", R"({"integrator": {"enable_light_sampling": 1}})", "", "integrator.enable_light_sampling", "true or false"},
+        BadInput{"MaxBouncesZero", R"({"integrator": {"max_bounces": 0}})", "", "integrator.max_bounces", "counts the light connection"},
+        BadInput{"LowOrderScatteringOff", R"({"integrator": {"low_order_scattering": false}})", "", "integrator.low_order_scattering", "false is not supported"},
+        BadInput{"IncludeSurfacesOff", R"({"integrator": {"include_surfaces": false}})", "", "integrator.include_surfaces", "false is not supported"},
+        BadInput{"MediumMaxBouncesNegative", R"({"media": [{"name": "m", "type": "homogeneous", "max_bounces": -1}]})", "", "media[0].max_bounces", "expected an integer"},
         BadInput{"UnsupportedIntegrator", R"({"integrator": {"type": "light_tracer"}})", "", "integrator.type", "unsupported integrator type 'light_tracer'"},
         BadInput{"PhotonMapWithoutRadius", R"({"integrator": {"type": "photon_map"}})", "", "integrator.gather_radius", "missing"},
         BadInput{"PhotonRadiusNegative", R"({"integrator": {"type": "photon_map", "gather_radius": -1}})", "", "integrator.gather_radius", "must be positive"},
@@ -600,6 +604,62 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"OverrideBadIndex", withPrimitive(kQuad), "primitives[x].bsdf=1", "primitives[x].bsdf", "malformed", ""},
         BadInput{"OverrideWrongValue", R"({})", "renderer.spp=lots", "renderer.spp", "expected an integer"}),
     [](const testing::TestParamInfo<BadInput>& info) { return std::string(info.param.name); });
+
+// Every Tungsten example scene in scenes/tungsten/ loads, or fails with one message naming the
+// file and the key (scenes/tungsten/README.md).
+std::string tungstenScene(const std::string& name) {
+    return std::string(TELESCOPE_SOURCE_DIR) + "/scenes/tungsten/" + name + "/scene.json";
+}
+
+InputError tungstenSceneError(const std::string& name, const std::vector<SceneOverride>& overrides = {}) {
+    try {
+        loadScene(tungstenScene(name), overrides);
+    } catch (const InputError& e) {
+        EXPECT_EQ(e.file(), tungstenScene(name)) << name;
+        return e;
+    }
+    ADD_FAILURE() << name << " loads: expected an InputError";
+    return InputError("", "", "");
+}
+
+TEST(TungstenExampleScenes, NonExponentialLoadsWithItsFourModels) {
+    const Scene s = loadScene(tungstenScene("non-exponential"));
+    ASSERT_EQ(s.media.size(), 4u);
+    EXPECT_EQ(s.media[0].transmittance.type, shader::kTrLinear);
+    EXPECT_FLOAT_EQ(s.media[0].transmittance.params.x, 0.75f);
+    EXPECT_EQ(s.media[1].transmittance.type, shader::kTrQuadratic);
+    EXPECT_EQ(s.media[2].transmittance.type, shader::kTrDoubleExponential);
+    EXPECT_FLOAT_EQ(s.media[2].transmittance.params.x, 1.0f);  // the scene's sigma_a, not the default 0.5
+    EXPECT_EQ(s.media[3].transmittance.type, shader::kTrPulse);
+    EXPECT_EQ(s.media[0].maxBounces, 1024u);
+    EXPECT_EQ(s.camera.width, 512u);  // "resolution": 512.0, a square
+    EXPECT_EQ(s.camera.height, 512u);
+    EXPECT_EQ(s.integrator.maxBounces, 3u);
+    EXPECT_EQ(pathDepthK(s.integrator), 2u);
+}
+
+TEST(TungstenExampleScenes, VolumetricCausticAsksForBdptAndLoadsPathTraced) {
+    const InputError e = tungstenSceneError("volumetric-caustic");
+    EXPECT_EQ(e.key(), "integrator.type");
+    EXPECT_NE(std::string(e.what()).find("--set integrator.type=\"path_tracer\""), std::string::npos) << e.what();
+    const Scene s = loadScene(tungstenScene("volumetric-caustic"), {parseOverride("integrator.type=\"path_tracer\"")});
+    EXPECT_EQ(s.integrator.maxBounces, 6u);
+    EXPECT_EQ(s.media.size(), 1u);
+}
+
+TEST(TungstenExampleScenes, WaterCausticNamesTheMissingMesh) {
+    const InputError e = tungstenSceneError("water-caustic");
+    EXPECT_EQ(e.key(), "primitives[8].file");
+    EXPECT_NE(std::string(e.what()).find("water.wo3"), std::string::npos) << e.what();
+}
+
+TEST(TungstenExampleScenes, VoxelMediumAndHairFailClearly) {
+    const InputError voxel = tungstenSceneError("voxel-medium");
+    EXPECT_EQ(voxel.key().rfind("media[0].grid", 0), 0u) << voxel.what();
+    const InputError hair = tungstenSceneError("hair");
+    EXPECT_EQ(hair.key(), "bsdfs[0].type");
+    EXPECT_NE(std::string(hair.what()).find("hair"), std::string::npos) << hair.what();
+}
 
 TEST(SceneLoaderErrors, MissingSceneFile) {
     const std::string path = (scratchDir() / "no-such-scene.json").string();

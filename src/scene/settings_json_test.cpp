@@ -2,7 +2,10 @@
 // scene whose settings were all different, for every shipped scene and a few patched ones.
 #include "scene/settings_json.h"
 
+#include <algorithm>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -52,8 +55,13 @@ void expectRoundTrip(const Scene& scene, const std::string& what) {
 
 TEST(SettingsJson, EveryShippedSceneRoundTrips) {
     int scenes = 0;
+    // Tungsten example scenes that fail to load by design, each with its one message
+    // (scenes/tungsten/README.md; checked by TungstenExampleScenes in scene_loader_test.cpp).
+    const std::vector<std::string> failing = {"hair", "voxel-medium", "water-caustic", "volumetric-caustic"};
     for (const auto& entry : fs::recursive_directory_iterator(TELESCOPE_SOURCE_DIR "/scenes")) {
         if (entry.path().extension() != ".json") continue;
+        if (std::find(failing.begin(), failing.end(), entry.path().parent_path().filename().string()) != failing.end())
+            continue;
         expectRoundTrip(loadScene(entry.path().string()), entry.path().string());
         ++scenes;
     }

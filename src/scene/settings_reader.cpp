@@ -113,16 +113,28 @@ void SceneReader::readIntegrator(const json& v) {
     s.type = IntegratorType::PathTracer;
 
     if (const json* n = find(v, "min_bounces")) s.minBounces = integer(*n, "integrator.min_bounces", 0, kMaxBounces);
-    if (const json* n = find(v, "max_bounces")) s.maxBounces = integer(*n, "integrator.max_bounces", 0, kMaxBounces);
+    if (const json* n = find(v, "max_bounces")) {
+        s.maxBounces = integer(*n, "integrator.max_bounces", 0, kMaxBounces);
+        if (s.maxBounces == 0)
+            fail("integrator.max_bounces",
+                 "0 renders nothing: max_bounces counts the light connection, as in Tungsten (1 shows only the "
+                 "emitters, 2 adds direct light)");
+    }
     if (const json* b = find(v, "enable_light_sampling")) s.enableLightSampling = boolean(*b, "integrator.enable_light_sampling");
     if (const json* b = find(v, "enable_two_sided_shading"))
         s.enableTwoSidedShading = boolean(*b, "integrator.enable_two_sided_shading");
     if (const json* d = find(v, "debias"); d && !d->is_null()) readDebias(*d, "integrator.debias");
     if (const json* t = find(v, "transmittance_estimator"); t && !t->is_null())
         readTransmittanceEstimator(*t, "integrator.transmittance_estimator");
+    // Tungsten's switches that drop light from the image (PathTracer.cpp): false would render a
+    // different image, which Telescope does not; true is what it renders.
+    for (const char* name : {"low_order_scattering", "include_surfaces"})
+        if (const json* b = find(v, name); b && !boolean(*b, key + "." + name))
+            fail(key + "." + name, "false is not supported (Telescope renders every scattering order and the "
+                                   "surfaces, Tungsten's default true)");
 
     ignoreUnread(v, key, {"type", "min_bounces", "max_bounces", "enable_light_sampling", "enable_two_sided_shading", "debias",
-                          "transmittance_estimator"});
+                          "transmittance_estimator", "low_order_scattering", "include_surfaces"});
 }
 
 // photon_map and progressive_photon_map: Tungsten's keys (photon_count, gather_radius, alpha,

@@ -18,7 +18,8 @@ struct Preset {
 };
 
 std::vector<SceneOverride> pathDepth(uint32_t k, const char* estimator, const char* pmf = R"({"type":"geometric","r":0.65})") {
-    std::vector<SceneOverride> o = {{"integrator.max_bounces", std::to_string(k)}};
+    // k bounces: max_bounces counts the light connection (pathDepthK, src/scene/scene.h).
+    std::vector<SceneOverride> o = {{"integrator.max_bounces", std::to_string(k + 1)}};
     if (estimator)
         o.push_back({"integrator.debias", fmt::format(R"({{"estimator":"{}","pmf":{}}})", estimator, pmf)});
     else

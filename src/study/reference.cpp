@@ -46,8 +46,8 @@ UnbiasedSetup unbiasedSetup(const Scene& scene) {
         return s;
     }
     in.debias = sumOverPathDepth();
-    s.why += fmt::format("added the sum estimator over path depth beyond max_bounces = {} (geometric pmf, r = 0.65)",
-                        in.maxBounces);
+    s.why += fmt::format("added the sum estimator over path depth beyond k = max_bounces - 1 = {} (geometric pmf, r = 0.65)",
+                        pathDepthK(in));
     return s;
 }
 

@@ -50,7 +50,7 @@ TEST(Methods, PresetsAndCustomMethods) {
     EXPECT_EQ(m.label, "single_term:3");
     ASSERT_EQ(m.overrides.size(), 2u);
     EXPECT_EQ(m.overrides[0].key, "integrator.max_bounces");
-    EXPECT_EQ(m.overrides[0].value, "3");
+    EXPECT_EQ(m.overrides[0].value, "4");  // k = 3 bounces: max_bounces counts the light connection
     EXPECT_NE(m.overrides[1].value.find("single_term"), std::string::npos);
     EXPECT_EQ(parseMethod("biased:2", "--methods").overrides[1].value, "null");
 

@@ -1,0 +1,237 @@
+// Tungsten's example scenes (scenes/tungsten/) against Tungsten's own renders of them
+// (docs/TESTING.md, "Tungsten's example scenes"). The references are Tungsten 0.2.2's renders
+// at 256 x 256 (non-exponential, 4096 spp) and 256 x 144 (volumetric-caustic with
+// integrator.type path_tracer, 8192 spp), committed as 16 x 16-pixel block means in tests/data/
+// (tests/data/make_block_means.py). The tests render the unmodified scene at a quarter of that
+// resolution, so each block of the reference is a block of 4 x 4 pixels here, and compare the
+// block means of R + G + B, e_b = (render_b - reference_b) / reference_b over the lit blocks
+// (reference above 1/4 of the mean block; the blocks that hold a directly seen light are left
+// out, see lightBlocks): bounds on the median of e_b (a bias of the whole image) and on the 75th
+// percentile of |e_b|; for non-exponential also on the largest |render_b - reference_b| /
+// max(reference_b, floor) over all blocks and on the error of the image mean. The bounds are calibrated on two
+// renders of the same setting with different seeds (their numbers are next to each bound): the
+// reference's own noise is far below the render's (about 250x the samples per block), so a
+// correct render's error is its own noise plus the small difference the filter's footprint makes
+// at a quarter of the resolution. Positive controls: the old bounce counting (a path with
+// max_bounces scattering vertices kept: max_bounces + 1 here) fails the same bounds.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "region_stats.h"
+#include "render_harness.h"
+
+using namespace telescope;
+using namespace telescope::test;
+
+namespace {
+
+struct BlockTable {
+    uint32_t columns = 0, rows = 0;
+    std::vector<double> sum;  // R + G + B per block, row-major
+};
+
+BlockTable readBlocks(const std::string& relative) {
+    BlockTable t;
+    std::ifstream in(sourcePath(relative));
+    EXPECT_TRUE(in) << "cannot read " << relative;
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.empty() || line[0] == '#') continue;
+        std::istringstream s(line);
+        uint32_t bx = 0, by = 0;
+        double r = 0, g = 0, b = 0;
+        s >> bx >> by >> r >> g >> b;
+        t.columns = std::max(t.columns, bx + 1);
+        t.rows = std::max(t.rows, by + 1);
+        t.sum.push_back(r + g + b);
+    }
+    EXPECT_EQ(t.sum.size(), size_t(t.columns) * t.rows) << relative;
+    return t;
+}
+
+// Blocks that hold a directly seen light: the scenes' lights are tiny quads (about 0.005 wide)
+// of radiance ~1e5, seen by a pixel of the test's resolution with probability ~0.4% per sample,
+// so their block means are far noisier than the rest (a render at the tests' spp often misses a
+// light entirely) and they are left out: every block that the reconstruction filter's footprint
+// around a light's projected centre (+-1 pixel of the test's resolution) overlaps. Every light's
+// halo in the media stays in.
+std::vector<bool> lightBlocks(const Scene& scene, const BlockTable& ref, uint32_t refWidth) {
+    std::vector<bool> out(ref.sum.size(), false);
+    const Camera& c = scene.camera;
+    const float planeDistance = 1.0f / std::tan(0.5f * glm::radians(c.fovDegrees));
+    const double blockPixels = double(refWidth) / ref.columns;     // reference pixels per block
+    const double footprint = double(refWidth) / double(c.width);   // one test pixel, in reference pixels
+    for (const Geometry& g : scene.geometry) {
+        if (g.emission == glm::vec3(0.0f)) continue;
+        const glm::vec3 centre = g.type == GeometryType::Triangle ? (g.p0 + g.p1 + g.p2) / 3.0f : g.p0;
+        const glm::vec3 d = centre - c.position;
+        const float z = glm::dot(d, c.forward);
+        if (!(z > 0.0f)) continue;
+        const double x = (planeDistance * glm::dot(d, c.right) / z + 1.0) * 0.5 * refWidth;
+        const double y = (double(ref.rows) / ref.columns - planeDistance * glm::dot(d, c.up) / z) * 0.5 * refWidth;
+        for (uint32_t by = 0; by < ref.rows; ++by)
+            for (uint32_t bx = 0; bx < ref.columns; ++bx)
+                if (x + footprint > bx * blockPixels && x - footprint < (bx + 1) * blockPixels &&
+                    y + footprint > by * blockPixels && y - footprint < (by + 1) * blockPixels)
+                    out[size_t(by) * ref.columns + bx] = true;
+    }
+    return out;
+}
+
+struct Agreement {
+    // Over the lit blocks (reference above the floor, lights left out), e_b = (render_b - ref_b) / ref_b:
+    double signedMedian = 0.0;  // median of e_b: a bias of the whole image shows here
+    double p75 = 0.0;           // 75th percentile of |e_b|
+    // Over every block but the lights, |render_b - ref_b| / max(ref_b, floor):
+    double maxError = 0.0;
+    double imageError = 0.0;  // (mean render - mean reference) / mean reference
+    std::string worst;
+    std::string skipped;  // the light blocks left out
+};
+
+// refWidth: the reference image's width in pixels.
+Agreement agreement(const Film& film, const Scene& scene, const BlockTable& ref, uint32_t refWidth) {
+    const uint32_t block = film.width() / ref.columns;
+    EXPECT_EQ(film.width(), block * ref.columns);
+    EXPECT_EQ(film.height(), block * ref.rows);
+    std::vector<RegionMean> blocks = blockMeans(film, block);
+    const std::vector<bool> skip = lightBlocks(scene, ref, refWidth);
+    std::string skipped;
+    for (size_t i = 0; i < skip.size(); ++i)
+        if (skip[i]) skipped += " (" + std::to_string(i % ref.columns) + ", " + std::to_string(i / ref.columns) + ")";
+    double refTotal = 0.0, total = 0.0;
+    size_t used = 0;
+    for (size_t i = 0; i < ref.sum.size(); ++i) {
+        if (skip[i]) continue;
+        refTotal += ref.sum[i];
+        total += blocks[i].mean.x + blocks[i].mean.y + blocks[i].mean.z;
+        ++used;
+    }
+    const double floor = 0.25 * refTotal / double(used);
+    Agreement a;
+    std::vector<double> signedErrors, absErrors;
+    for (size_t i = 0; i < ref.sum.size(); ++i) {
+        if (skip[i]) continue;
+        const double v = blocks[i].mean.x + blocks[i].mean.y + blocks[i].mean.z;
+        const double e = std::abs(v - ref.sum[i]) / std::max(ref.sum[i], floor);
+        if (e > a.maxError) {
+            a.maxError = e;
+            char text[160];
+            std::snprintf(text, sizeof text, "block (%zu, %zu): %.5f vs Tungsten %.5f", i % ref.columns,
+                          i / ref.columns, v, ref.sum[i]);
+            a.worst = text;
+        }
+        if (ref.sum[i] > floor) {
+            signedErrors.push_back((v - ref.sum[i]) / ref.sum[i]);
+            absErrors.push_back(std::abs(signedErrors.back()));
+        }
+    }
+    EXPECT_GT(signedErrors.size(), 20u);
+    std::sort(signedErrors.begin(), signedErrors.end());
+    std::sort(absErrors.begin(), absErrors.end());
+    a.signedMedian = signedErrors[signedErrors.size() / 2];
+    a.p75 = absErrors[absErrors.size() * 3 / 4];
+    a.imageError = (total - refTotal) / refTotal;
+    a.skipped = skipped;
+    return a;
+}
+
+void print(const char* what, const Agreement& a) {
+    std::printf("%s: lit blocks: median error %+.2f%%, 75th percentile of |error| %.1f%%; all blocks: max %.1f%% (%s), "
+                "image mean %+.2f%%; lights in blocks%s\n",
+                what, 100 * a.signedMedian, 100 * a.p75, 100 * a.maxError, a.worst.c_str(), 100 * a.imageError,
+                a.skipped.c_str());
+}
+
+// ---- Bounds, calibrated on two renders of the same setting with different seeds ----
+// non-exponential, 64 x 64, 128 spp. Seeds 11 and 12, one against the other: median difference
+// -0.03%, 75th percentile 10.2%, max 44%, image means 0.1% apart. Against Tungsten (seeds 1, 11,
+// 12): median +0.65%, -0.45%, -0.33%; 75th percentile 6.6%, 7.2%, 7.6%; max 25%, 61%, 32% (the
+// worst blocks sit in the halos of the lights, where next-event estimation from points near a tiny
+// light is heavy-tailed, and at the sharp edge where `linear` transmittance reaches 0, which the
+// tent filter blurs over 4x more of a block at this resolution); image mean -0.86%, -0.84%, -0.96%
+// (the same in every render, 0.1% apart: the filter at a quarter of the resolution carries more
+// of the halos into the light blocks left out). Bounds: about 4x the worst median, 1.5x the
+// seed-to-seed 75th percentile, 2x the worst max and 3x the worst image mean. The control
+// (max_bounces 4, seed 2): median +73%, 75th percentile 103%, max 460%, image mean +52%.
+constexpr uint64_t kNonExponentialSpp = 128;
+constexpr double kNonExponentialMedianBound = 0.04;
+constexpr double kNonExponentialP75Bound = 0.15;
+constexpr double kNonExponentialMaxBound = 1.2;
+constexpr double kNonExponentialImageBound = 0.03;
+
+// volumetric-caustic, 64 x 36, 256 spp. Seeds 5 and 6, one against the other: median difference
+// +0.3%, 75th percentile 14.0%, max 74%, image means 2.3% apart. Against Tungsten (seeds 5, 6; 3
+// at 128 spp; 21 at 2048 spp): median -2.8%, -1.8%, -4.5%, -1.3%; 75th percentile 12.2%, 13.7%,
+// 14.0%, 5.0%. No bound on the max nor on the image mean: the blocks of the volumetric caustic
+// (light focused by the glass ball into the medium and onto the floor) stay 40-95% below Tungsten
+// at every sample count tried (the same values at 128, 256, 2048 and 16384 spp) and hold the image
+// mean 4.5-8% low. A path tracer reaches the caustic only by hitting the 0.005 x 0.004 light
+// through the ball, so this may be paths too rare for these renders, but the values did not move
+// with 8x the samples: it may as well be a real difference. UNRESOLVED (docs/TESTING.md); those
+// blocks are in the upper quarter of the errors, outside these bounds. Bounds: 2x the worst median and
+// 1.8x the worst 75th percentile. The control (max_bounces 7, seed 7): median +17.4%, 75th
+// percentile 35.7% (image mean +9.3%, as Telescope before the bounce counting was fixed).
+constexpr uint64_t kVolumetricCausticSpp = 256;
+constexpr double kVolumetricCausticMedianBound = 0.10;
+constexpr double kVolumetricCausticP75Bound = 0.25;
+
+class TungstenScenes : public ::testing::Test {
+protected:
+    void TearDown() override { expectNoValidationMessages(); }
+};
+
+}  // namespace
+
+// non-exponential: four homogeneous media (linear, quadratic, double_exponential, pulse
+// transmittance) behind forward boundaries, max_bounces 3: the camera ray's crossing and one
+// scattering event (medium or surface) before the light connection.
+TEST_F(TungstenScenes, NonExponentialMatchesTungsten) {
+    const BlockTable ref = readBlocks("tests/data/non-exponential_256x256_pt_4096spp_blocks16.txt");
+    const char* scene = "scenes/tungsten/non-exponential/scene.json";
+    const uint64_t spp = kNonExponentialSpp;
+    const Scene s = loadTestScene(scene, {{"camera.resolution", "[64,64]"}});
+    Agreement a = agreement(renderFilm(s, spp, 1), s, ref, 256);
+    print("non-exponential", a);
+    EXPECT_LT(std::abs(a.signedMedian), kNonExponentialMedianBound);
+    EXPECT_LT(a.p75, kNonExponentialP75Bound);
+    EXPECT_LT(a.maxError, kNonExponentialMaxBound) << a.worst;
+    EXPECT_LT(std::abs(a.imageError), kNonExponentialImageBound);
+    const Scene deeper = loadTestScene(scene, {{"camera.resolution", "[64,64]"}, {"integrator.max_bounces", "4"}});
+    Agreement control = agreement(renderFilm(deeper, spp, 2), deeper, ref, 256);
+    print("control, one more bounce (the old counting)", control);
+    EXPECT_TRUE(std::abs(control.signedMedian) > kNonExponentialMedianBound || control.p75 > kNonExponentialP75Bound ||
+                control.maxError > kNonExponentialMaxBound || std::abs(control.imageError) > kNonExponentialImageBound)
+        << "the test cannot see a path depth off by one";
+}
+
+// volumetric-caustic, path traced (Tungsten's file asks for bidirectional path tracing; the
+// reference is Tungsten's path tracer with light sampling, max_bounces 6): a homogeneous
+// scattering medium (sigma_s 1) filling the box, a glass ball focusing the small light into a
+// volumetric caustic. Each path holds the crossing of the front boundary, so k = 5 leaves four
+// scattering events inside.
+TEST_F(TungstenScenes, VolumetricCausticPathTracedMatchesTungsten) {
+    const BlockTable ref = readBlocks("tests/data/volumetric-caustic_256x144_pt_8192spp_blocks16.txt");
+    const char* scene = "scenes/tungsten/volumetric-caustic/scene.json";
+    const uint64_t spp = kVolumetricCausticSpp;
+    const std::vector<SceneOverride> base = {{"camera.resolution", "[64,36]"}, {"integrator.type", "\"path_tracer\""}};
+    const Scene s = loadTestScene(scene, base);
+    Agreement a = agreement(renderFilm(s, spp, 5), s, ref, 256);
+    print("volumetric-caustic", a);
+    EXPECT_LT(std::abs(a.signedMedian), kVolumetricCausticMedianBound);
+    EXPECT_LT(a.p75, kVolumetricCausticP75Bound);
+    std::vector<SceneOverride> deeperOverrides = base;
+    deeperOverrides.push_back({"integrator.max_bounces", "7"});
+    const Scene deeper = loadTestScene(scene, deeperOverrides);
+    Agreement control = agreement(renderFilm(deeper, spp, 7), deeper, ref, 256);
+    print("control, one more bounce (the old counting)", control);
+    EXPECT_TRUE(std::abs(control.signedMedian) > kVolumetricCausticMedianBound || control.p75 > kVolumetricCausticP75Bound)
+        << "the test cannot see a path depth off by one";
+}
