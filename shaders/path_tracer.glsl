@@ -102,11 +102,14 @@ PathState beginPath(vec3 origin, vec3 dir, uint level) {
 // in the medium (the state is advanced to the next vertex), 2 the path ends ----
 uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng) {
     uint mi = s.medium - 1u;
-    vec3 p;
-    bool scattered = sampleMediumSegment(mi, s.origin, s.dir, tHit, s.fromSurface, s.throughput, p, rng);
+    vec3 p, emitted;
+    bool scattered = sampleMediumSegment(mi, s.origin, s.dir, tHit, s.fromSurface, s.throughput, p, emitted, rng);
+    uint v = s.vertex;
+    // Medium emission at the collision that is vertex v counts v bounces (like light sampled from
+    // there), so max_bounces k keeps it for v <= k, as Tungsten's loop does.
+    if (kHasGrids && any(notEqual(emitted, vec3(0.0)))) addContribution(s.result, v, emitted, pmf, s.level);
     if (s.throughput == vec3(0.0)) return 2u;
     if (!scattered) return 0u;
-    uint v = s.vertex;
     if (v > s.limit) return 2u;
     if (kLightSampling && kLightCount > 0u) {
         uint crossings;

@@ -28,7 +28,7 @@ CONST uint kLightEnvironment = 2u;
 // ---- Participating media (MediumType, PhaseFunction) ----
 CONST uint kMediumHomogeneous = 0u;
 CONST uint kMediumExponential = 1u;  // density exp(-falloffScale dot(x - unitPoint, falloffDir))
-CONST uint kMediumGrid = 2u;         // voxel grid over the box [gridMin, gridMax], trilinear
+CONST uint kMediumGrid = 2u;         // voxel grid over an affinely placed box (MediumGpu::gridRow*)
 CONST uint kPhaseIsotropic = 0u;
 CONST uint kPhaseHenyeyGreenstein = 1u;
 

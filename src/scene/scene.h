@@ -69,8 +69,19 @@ struct TransmittanceModel {
 struct DensityGrid {
     glm::uvec3 resolution{0};
     std::vector<float> density;  // x fastest
-    glm::vec3 boxMin{-0.5f}, boxMax{0.5f};  // world-space box the grid fills
-    std::string source;          // "procedural_cloud", "constant"
+    // Emission per unit length (3 floats per voxel, x fastest; empty = none), emission_scale
+    // applied; times the density where emissionByDensity (Tungsten's scale_emission_by_density).
+    std::vector<float> emission;
+    bool emissionByDensity = false;
+    bool nearest = false;        // nearest-voxel lookups (Tungsten's exact_nearest), else trilinear
+    // The unit box [0, 1]^3 (voxel centres at (i + 1/2) / res) to world space, affine.
+    glm::mat4 unitToWorld{1.0f};
+    // Majorant grid: cells of majorantCell^3 voxels (0 = one majorant for the whole grid).
+    uint32_t majorantCell = 8;
+    // Test hook (not read from scenes): false builds the majorant cells from their own voxels only,
+    // ignoring the neighbours a trilinear lookup reads: a wrong (too small) majorant on purpose.
+    bool majorantCoversStencil = true;
+    std::string source;          // "procedural_cloud", "constant", "linear", "vdb"
 };
 
 struct Medium {
