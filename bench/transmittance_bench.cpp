@@ -14,6 +14,7 @@
 #include "bench_main.h"
 #include "gpu/context.h"
 #include "render/renderer.h"
+#include "scene/density_grid.h"
 #include "scene/scene_loader.h"
 #include "shared/transmittance_estimators.h"
 
@@ -76,6 +77,61 @@ void renderEfficiency(benchmark::State& state, const std::string& sceneName, con
     state.counters["render_s"] = seconds;
     state.counters["mse"] = mse;
     state.counters["work_x_mse"] = workMse;
+}
+
+// The majorant grid against one global majorant (docs/MEDIA.md): the Davis cloud (a sparse
+// procedural grid) with exponential transmittance so that the trackers apply, rendered with
+// majorant cells of `cell` voxels (0: one majorant for the grid). MSE = variance of the pixel mean
+// (unbiased estimators); also the mean over the grid's volume of the cell majorant relative to the
+// global one (the expected tentative collisions per unit length, relative).
+void majorantEfficiency(benchmark::State& state, const std::string& estimator, uint32_t cell) {
+    std::vector<SceneOverride> overrides = {{"camera.resolution", "[48,32]"},
+                                            {"media[0].transmittance", R"({"type":"exponential"})"},
+                                            {"media[0].grid.majorant_cell", std::to_string(cell)},
+                                            {"integrator.transmittance_estimator", kEstimators.at(estimator)}};
+    Scene scene = loadScene(std::string(TELESCOPE_SOURCE_DIR) + "/scenes/davis-cloud.json", overrides);
+    const uint64_t spp = 8;
+    double seconds = 0.0, mse = 0.0;
+    for (auto _ : state) {
+        Renderer renderer(context(), scene, 7);
+        RenderRequest request;
+        request.spp = spp;
+        renderer.render(request);
+        seconds = renderer.stats().wallSeconds;
+        Film film = renderer.film();
+        double sum = 0.0;
+        for (size_t i = 0; i < film.pixelCount(); ++i) {
+            const glm::dvec3 v = film.varianceOfMean(i);
+            sum += (v.x + v.y + v.z) / 3.0;
+        }
+        mse = sum / double(film.pixelCount());
+        state.SetIterationTime(seconds);
+    }
+    const DensityGrid& grid = scene.media[0].grid;
+    const std::vector<glm::vec2> cells = majorantGrid(grid);
+    const glm::uvec3 res = majorantResolution(grid);
+    double volume = 0.0, weighted = 0.0, global = 0.0;
+    for (float d : grid.density) global = std::max(global, double(d));
+    for (uint32_t z = 0; z < res.z; ++z)
+        for (uint32_t y = 0; y < res.y; ++y)
+            for (uint32_t x = 0; x < res.x; ++x) {
+                // the cell's share of the grid (the last cell along an axis may be partial)
+                glm::dvec3 size(1.0);
+                if (cell > 0)
+                    for (int a = 0; a < 3; ++a)
+                        size[a] = double(std::min((glm::uvec3(x, y, z)[a] + 1) * cell, grid.resolution[a]) -
+                                         glm::uvec3(x, y, z)[a] * cell);
+                const double v = size.x * size.y * size.z;
+                volume += v;
+                weighted += v * cells[(size_t(z) * res.y + y) * res.x + x].y;
+            }
+    size_t empty = 0;
+    for (float d : grid.density) empty += d == 0.0f;
+    state.counters["render_s"] = seconds;
+    state.counters["mse"] = mse;
+    state.counters["work_x_mse"] = seconds * mse;
+    state.counters["majorant_ratio"] = weighted / volume / global;
+    state.counters["empty_voxels"] = double(empty) / double(grid.density.size());
 }
 
 // Density lookups per second of the shared estimator code on the CPU (one thread): a segment of
@@ -166,6 +222,19 @@ RENDER_BENCH(smoke, ratio_tracking);
 RENDER_BENCH(smoke, residual_ratio_tracking);
 RENDER_BENCH(smoke, unbiased_ray_march);
 
+#define MAJORANT_BENCH(est, cell)                                                  \
+    BENCHMARK_CAPTURE(majorantEfficiency, est##_cell##cell, #est, cell)            \
+        ->Iterations(1)->UseManualTime()->Unit(benchmark::kMillisecond)
+MAJORANT_BENCH(delta_tracking, 0);
+MAJORANT_BENCH(delta_tracking, 8);
+MAJORANT_BENCH(delta_tracking, 4);
+MAJORANT_BENCH(ratio_tracking, 0);
+MAJORANT_BENCH(ratio_tracking, 8);
+MAJORANT_BENCH(ratio_tracking, 4);
+MAJORANT_BENCH(residual_ratio_tracking, 0);
+MAJORANT_BENCH(residual_ratio_tracking, 8);
+MAJORANT_BENCH(residual_ratio_tracking, 4);
+
 BENCHMARK_CAPTURE(lookupsPerSecond, ray_march_k1, shader::kTrEstRayMarch);
 BENCHMARK_CAPTURE(lookupsPerSecond, debiased_ray_march, shader::kTrEstDebiasedRayMarch);
 BENCHMARK_CAPTURE(lookupsPerSecond, delta_tracking, shader::kTrEstDeltaTracking);
@@ -204,6 +273,29 @@ std::string tables(const bench::Runs& runs) {
             s += fmt::format("| {} | {:.3f} | {:.3g} | {:.3g} | {:.2f} |\n", l.substr(std::string(scene).size()),
                              counter(r, "render_s"), counter(r, "mse"), w, ratio > 0 ? w / ratio : 0.0);
         }
+    }
+    bool majorantHeader = false;
+    for (const auto& r : runs) {
+        if (r.benchmark_name().rfind("majorantEfficiency", 0) != 0) continue;
+        const std::string l = label(r);
+        const std::string est = l.substr(0, l.rfind("_cell")), cell = l.substr(l.rfind("_cell") + 5);
+        double global = 0.0;
+        for (const auto& g : runs)
+            if (label(g) == est + "_cell0") global = counter(g, "work_x_mse");
+        if (!majorantHeader) {
+            s += fmt::format("\n**Majorant grid against one global majorant** (Davis cloud with exponential "
+                             "transmittance, 48x32, 8 spp; {:.0f}% of its voxels empty; MSE = variance of the pixel "
+                             "mean; mean majorant = the cells' majorant averaged over the grid's volume, relative to "
+                             "the global one):\n\n",
+                             100.0 * counter(r, "empty_voxels"));
+            s += "| estimator | majorant cell (voxels) | mean majorant | render s | MSE | work x MSE | / global |\n"
+                 "|---|---|---|---|---|---|---|\n";
+            majorantHeader = true;
+        }
+        const double w = counter(r, "work_x_mse");
+        s += fmt::format("| {} | {} | {:.3f} | {:.3f} | {:.3g} | {:.3g} | {:.2f} |\n", est,
+                         cell == "0" ? std::string("global") : cell, counter(r, "majorant_ratio"), counter(r, "render_s"),
+                         counter(r, "mse"), w, global > 0 ? w / global : 0.0);
     }
     s += "\n**Density lookups per second** (shared estimator code on one CPU thread, exponential falloff "
          "segment, tau = 1.5):\n\n| estimator | Mlookups/s | lookups per estimate |\n|---|---|---|\n";

@@ -259,7 +259,9 @@ vec3 shadowTransmittance(vec3 o, vec3 d, float tMax, uint medium, bool startOnSu
         bool found = traceClosest(o, d, tMax, hit);
         float end = found ? hit.t : tMax;
         if (medium != 0u) {
-            if (!(end < kInfinity)) return vec3(0.0);  // an unbounded medium absorbs everything
+            // an unbounded medium absorbs everything; a grid ends at its box
+            bool grid = kHasGrids && media[medium - 1u].type == kMediumGrid;
+            if (!(end < kInfinity) && !grid) return vec3(0.0);
             tr *= mediumTransmittance(medium - 1u, o, d, end, startOnSurface, true, rng);
         }
         if (!found) return tr;

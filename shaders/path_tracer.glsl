@@ -143,8 +143,11 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     Hit hit;
     bool found = traceClosest(s.origin, s.dir, kInfinity, hit);
     if (kHasMedia && s.medium != 0u) {
-        if (!found) return false;  // media are enclosed by their boundaries; an unbounded one absorbs all
-        uint r = mediumStep(s, hit.t, pmf, rng);
+        // Media are enclosed by their boundaries, and an unbounded one absorbs all; a grid medium
+        // is bounded by its box, so a ray may leave the scene through it (Tungsten's voxel medium).
+        bool gridMedium = kHasGrids && media[s.medium - 1u].type == kMediumGrid;
+        if (!found && !gridMedium) return false;
+        uint r = mediumStep(s, found ? hit.t : kInfinity, pmf, rng);
         if (r == 1u) return true;
         if (r == 2u) return false;
     }
@@ -154,6 +157,14 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
             float mis = (s.specularPrev || !kLightSampling) ? 1.0
                                                              : powerHeuristic(s.pdfPrev, env.pmf / (4.0 * kPi));
             addContribution(s.result, v - 1u, s.throughput * env.radiance * mis, pmf, s.level);
+        }
+        if (kCapLight != 0xffffffffu) {
+            LightGpu cap = lights[kCapLight];
+            if (dot(s.dir, cap.position) >= cap.cosCap) {
+                float pdf = cap.pmf / (2.0 * kPi * (1.0 - cap.cosCap));
+                float mis = (s.specularPrev || !kLightSampling) ? 1.0 : powerHeuristic(s.pdfPrev, pdf);
+                addContribution(s.result, v - 1u, s.throughput * cap.radiance * mis, pmf, s.level);
+            }
         }
         return false;
     }

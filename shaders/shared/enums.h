@@ -24,6 +24,7 @@ CONST uint kBsdfForward = 4u;  // invisible medium boundary (Tungsten's "forward
 CONST uint kLightArea = 0u;  // an emissive Prim
 CONST uint kLightPoint = 1u;
 CONST uint kLightEnvironment = 2u;
+CONST uint kLightCap = 3u;  // infinite_sphere_cap: a cone of directions (LightGpu::position, cosCap)
 
 // ---- Participating media (MediumType, PhaseFunction) ----
 CONST uint kMediumHomogeneous = 0u;

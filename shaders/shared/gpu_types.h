@@ -38,7 +38,8 @@ CONST uint kMaterialRefraction = 1u;  // flags: dielectric transmits
 struct LightGpu {
     vec3 position; uint type;  // point: position
     vec3 radiance; uint prim;  // area: the primitive index
-    float pmf; float cdf; float pad0; float pad1;  // light selection probability, inclusive cdf
+    float pmf; float cdf; float cosCap; float pad1;  // light selection probability, inclusive cdf;
+                                                     // cap: cosine of the half angle (position: its axis)
 };
 
 // ---- Participating media (type: kMedium*, phase: kPhase*) ----
@@ -113,6 +114,7 @@ CONST uint kSpecLightSampling = 10u;
 CONST uint kSpecTwoSided = 11u;
 CONST uint kSpecFilter = 12u;
 CONST uint kSpecEnvironmentLight = 13u;  // light index, or 0xffffffff for none
+CONST uint kSpecCapLight = 20u;          // the infinite_sphere_cap light index, or 0xffffffff for none
 CONST uint kSpecMaxTraceDepth = 14u;
 CONST uint kTraceDepthCap = 4096u;       // rays per path at most (a debiased level beyond adds nothing)
 CONST uint kSpecRayEpsilon = 15u;        // absolute ray offset, from the scene size

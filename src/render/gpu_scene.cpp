@@ -179,6 +179,14 @@ GpuScene buildGpuScene(const Scene& scene) {
             l.position = pl.position;
             power.push_back(4.0f * glm::pi<float>() * lum);
             f.pointLights = true;
+        } else if (pl.type == LightType::Cap) {
+            // Power for light selection: the flux through the scene's disk, as for the environment.
+            l.type = uint32_t(pl.type);
+            l.position = pl.direction;
+            l.cosCap = pl.cosCap;
+            float r = 0.5f * f.sceneExtent;
+            power.push_back(lum * 2.0f * glm::pi<float>() * (1.0f - pl.cosCap) * glm::pi<float>() * r * r);
+            f.capLight = uint32_t(out.lights.size());
         } else {
             if (f.environment) continue;  // one environment; the loader rejects more
             l.type = uint32_t(pl.type);

@@ -115,6 +115,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecTwoSided, in.enableTwoSidedShading},
         {kSpecFilter, filterConstant(scene.camera)},
         {kSpecEnvironmentLight, f.environmentLight},
+        {kSpecCapLight, f.capLight},
         {kSpecMaxTraceDepth, std::max(shader::kTraceDepthCap, in.maxBounces + 1)},
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
         {kSpecPilot, plan.pilotLevel != kNoPilotLevel},

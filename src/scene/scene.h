@@ -105,13 +105,15 @@ enum class TransmittanceEstimatorType : uint32_t {
 };
 const char* transmittanceEstimatorName(TransmittanceEstimatorType t);
 
-enum class LightType : uint32_t { Point = shader::kLightPoint, Environment = shader::kLightEnvironment };
+enum class LightType : uint32_t { Point = shader::kLightPoint, Environment = shader::kLightEnvironment, Cap = shader::kLightCap };
 
 // Non-geometric emitters (area lights are the emissive Geometry entries).
 struct PointLikeLight {
     LightType type = LightType::Point;
     glm::vec3 position{0.0f};     // point
-    glm::vec3 intensity{0.0f};    // point: radiant intensity (W/sr); environment: radiance
+    glm::vec3 intensity{0.0f};    // point: radiant intensity (W/sr); environment, cap: radiance
+    glm::vec3 direction{0.0f, 1.0f, 0.0f};  // cap: the cone's axis (unit; light arrives from it)
+    float cosCap = -1.0f;                    // cap: cosine of the cone's half angle
     std::string name;
 };
 
