@@ -84,13 +84,19 @@ void renderEfficiency(benchmark::State& state, const std::string& sceneName, con
 // majorant cells of `cell` voxels (0: one majorant for the grid). MSE = variance of the pixel mean
 // (unbiased estimators); also the mean over the grid's volume of the cell majorant relative to the
 // global one (the expected tentative collisions per unit length, relative).
-void majorantEfficiency(benchmark::State& state, const std::string& estimator, uint32_t cell) {
+// `absorbing`: sigma_s 0 and sigma_a 5 (the cloud's extinction), so that paths are straight lines
+// through the cloud and the transmittance estimates are most of the work and all of the noise.
+void majorantEfficiency(benchmark::State& state, const std::string& estimator, uint32_t cell, bool absorbing) {
     std::vector<SceneOverride> overrides = {{"camera.resolution", "[48,32]"},
                                             {"media[0].transmittance", R"({"type":"exponential"})"},
                                             {"media[0].grid.majorant_cell", std::to_string(cell)},
                                             {"integrator.transmittance_estimator", kEstimators.at(estimator)}};
+    if (absorbing) {
+        overrides.push_back({"media[0].sigma_s", "0"});
+        overrides.push_back({"media[0].sigma_a", "5.05"});
+    }
     Scene scene = loadScene(std::string(TELESCOPE_SOURCE_DIR) + "/scenes/davis-cloud.json", overrides);
-    const uint64_t spp = 8;
+    const uint64_t spp = 64;
     double seconds = 0.0, mse = 0.0;
     for (auto _ : state) {
         Renderer renderer(context(), scene, 7);
@@ -222,18 +228,21 @@ RENDER_BENCH(smoke, ratio_tracking);
 RENDER_BENCH(smoke, residual_ratio_tracking);
 RENDER_BENCH(smoke, unbiased_ray_march);
 
-#define MAJORANT_BENCH(est, cell)                                                  \
-    BENCHMARK_CAPTURE(majorantEfficiency, est##_cell##cell, #est, cell)            \
+#define MAJORANT_BENCH(kind, absorbing, est, cell)                                               \
+    BENCHMARK_CAPTURE(majorantEfficiency, kind##_##est##_cell##cell, #est, cell, absorbing)      \
         ->Iterations(1)->UseManualTime()->Unit(benchmark::kMillisecond)
-MAJORANT_BENCH(delta_tracking, 0);
-MAJORANT_BENCH(delta_tracking, 8);
-MAJORANT_BENCH(delta_tracking, 4);
-MAJORANT_BENCH(ratio_tracking, 0);
-MAJORANT_BENCH(ratio_tracking, 8);
-MAJORANT_BENCH(ratio_tracking, 4);
-MAJORANT_BENCH(residual_ratio_tracking, 0);
-MAJORANT_BENCH(residual_ratio_tracking, 8);
-MAJORANT_BENCH(residual_ratio_tracking, 4);
+#define MAJORANT_BENCHES(kind, absorbing)                  \
+    MAJORANT_BENCH(kind, absorbing, delta_tracking, 0);          \
+    MAJORANT_BENCH(kind, absorbing, delta_tracking, 8);          \
+    MAJORANT_BENCH(kind, absorbing, delta_tracking, 4);          \
+    MAJORANT_BENCH(kind, absorbing, ratio_tracking, 0);          \
+    MAJORANT_BENCH(kind, absorbing, ratio_tracking, 8);          \
+    MAJORANT_BENCH(kind, absorbing, ratio_tracking, 4);          \
+    MAJORANT_BENCH(kind, absorbing, residual_ratio_tracking, 0); \
+    MAJORANT_BENCH(kind, absorbing, residual_ratio_tracking, 8); \
+    MAJORANT_BENCH(kind, absorbing, residual_ratio_tracking, 4)
+MAJORANT_BENCHES(absorbing, true);
+MAJORANT_BENCHES(scattering, false);
 
 BENCHMARK_CAPTURE(lookupsPerSecond, ray_march_k1, shader::kTrEstRayMarch);
 BENCHMARK_CAPTURE(lookupsPerSecond, debiased_ray_march, shader::kTrEstDebiasedRayMarch);
@@ -278,22 +287,26 @@ std::string tables(const bench::Runs& runs) {
     for (const auto& r : runs) {
         if (r.benchmark_name().rfind("majorantEfficiency", 0) != 0) continue;
         const std::string l = label(r);
-        const std::string est = l.substr(0, l.rfind("_cell")), cell = l.substr(l.rfind("_cell") + 5);
+        const std::string kind = l.substr(0, l.find('_'));
+        const std::string est = l.substr(kind.size() + 1, l.rfind("_cell") - kind.size() - 1),
+                          cell = l.substr(l.rfind("_cell") + 5);
         double global = 0.0;
         for (const auto& g : runs)
-            if (label(g) == est + "_cell0") global = counter(g, "work_x_mse");
+            if (label(g) == kind + "_" + est + "_cell0") global = counter(g, "work_x_mse");
         if (!majorantHeader) {
             s += fmt::format("\n**Majorant grid against one global majorant** (Davis cloud with exponential "
-                             "transmittance, 48x32, 8 spp; {:.0f}% of its voxels empty; MSE = variance of the pixel "
-                             "mean; mean majorant = the cells' majorant averaged over the grid's volume, relative to "
-                             "the global one):\n\n",
+                             "transmittance, 48x32, 64 spp; {:.0f}% of its voxels empty; absorbing: sigma_s 0, sigma_a "
+                             "5.05, so paths are straight and the trackers are the noise; scattering: the scene's "
+                             "sigma_s 5; MSE = variance of the pixel mean; mean majorant = the cells' majorant "
+                             "averaged over the grid's volume, relative to the global one, i.e. the tentative "
+                             "collisions per unit length):\n\n",
                              100.0 * counter(r, "empty_voxels"));
-            s += "| estimator | majorant cell (voxels) | mean majorant | render s | MSE | work x MSE | / global |\n"
-                 "|---|---|---|---|---|---|---|\n";
+            s += "| cloud | estimator | majorant cell (voxels) | mean majorant | render s | MSE | work x MSE | / global |\n"
+                 "|---|---|---|---|---|---|---|---|\n";
             majorantHeader = true;
         }
         const double w = counter(r, "work_x_mse");
-        s += fmt::format("| {} | {} | {:.3f} | {:.3f} | {:.3g} | {:.3g} | {:.2f} |\n", est,
+        s += fmt::format("| {} | {} | {} | {:.3f} | {:.3f} | {:.3g} | {:.3g} | {:.2f} |\n", kind, est,
                          cell == "0" ? std::string("global") : cell, counter(r, "majorant_ratio"), counter(r, "render_s"),
                          counter(r, "mse"), w, global > 0 ? w / global : 0.0);
     }
