@@ -79,6 +79,48 @@ void renderEfficiency(benchmark::State& state, const std::string& sceneName, con
     state.counters["work_x_mse"] = workMse;
 }
 
+// Expected loop iterations of the grid trackers (shaders/medium.glsl, trTrackGrid) per segment,
+// from the majorant grid alone: tentative collisions (the cells' majorant optical depth along the
+// segment) and cells entered (one DDA step each), over 4096 segments from uniform points in the grid
+// box in uniform directions to the box's face (a shadow ray from inside the cloud). Marched in steps
+// of 1/16 of a voxel, so a cell clipped at a corner may be missed. A model of the loop's cost, not
+// a measurement on the device.
+glm::dvec2 trackingLoopSteps(const DensityGrid& grid, glm::dvec3 sigmaT) {
+    const std::vector<glm::vec2> cells = majorantGrid(grid);
+    const glm::uvec3 res = majorantResolution(grid);
+    const glm::dvec3 scale = grid.majorantCell == 0 ? glm::dvec3(1.0)
+                                                     : glm::dvec3(grid.resolution) / double(grid.majorantCell);
+    const glm::dmat4 toWorld(grid.unitToWorld);
+    const double sMax = std::max(sigmaT.x, std::max(sigmaT.y, sigmaT.z));
+    uint64_t state = 12345;
+    auto uniform = [&] {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return double(state >> 11) * 0x1.0p-53;
+    };
+    double collisions = 0.0, entered = 0.0;
+    const int rays = 4096;
+    const double du = 1.0 / (16.0 * std::max(grid.resolution.x, std::max(grid.resolution.y, grid.resolution.z)));
+    for (int r = 0; r < rays; ++r) {
+        glm::dvec3 u(uniform(), uniform(), uniform());
+        const double z = 1.0 - 2.0 * uniform(), phi = 6.283185307179586 * uniform(), sr = std::sqrt(1.0 - z * z);
+        const glm::dvec3 worldDir(sr * std::cos(phi), sr * std::sin(phi), z);
+        // the direction in unit-box coordinates and the world length of one unit-box step along it
+        glm::dvec3 ud = glm::inverse(glm::dmat3(toWorld)) * worldDir;
+        const double perUnit = 1.0 / glm::length(ud);
+        ud *= perUnit;  // unit-box step of world length perUnit
+        glm::ivec3 last(-1);
+        while (u.x >= 0.0 && u.y >= 0.0 && u.z >= 0.0 && u.x <= 1.0 && u.y <= 1.0 && u.z <= 1.0) {
+            const glm::ivec3 c = glm::clamp(glm::ivec3(glm::floor(u * scale)), glm::ivec3(0), glm::ivec3(res) - 1);
+            if (c != last) entered += 1.0;
+            last = c;
+            const double mu = sMax * cells[(size_t(c.z) * res.y + c.y) * res.x + c.x].y;
+            collisions += mu * du * perUnit;
+            u += ud * du;
+        }
+    }
+    return {collisions / rays, entered / rays};
+}
+
 // The majorant grid against one global majorant (docs/MEDIA.md): the Davis cloud (a sparse
 // procedural grid) with exponential transmittance so that the trackers apply, rendered with
 // majorant cells of `cell` voxels (0: one majorant for the grid). MSE = variance of the pixel mean
@@ -133,11 +175,14 @@ void majorantEfficiency(benchmark::State& state, const std::string& estimator, u
             }
     size_t empty = 0;
     for (float d : grid.density) empty += d == 0.0f;
+    const glm::dvec2 steps = trackingLoopSteps(grid, glm::dvec3(scene.media[0].sigmaA + scene.media[0].sigmaS));
     state.counters["render_s"] = seconds;
     state.counters["mse"] = mse;
     state.counters["work_x_mse"] = seconds * mse;
     state.counters["majorant_ratio"] = weighted / volume / global;
     state.counters["empty_voxels"] = double(empty) / double(grid.density.size());
+    state.counters["collisions"] = steps.x;
+    state.counters["cells"] = steps.y;
 }
 
 // Density lookups per second of the shared estimator code on the CPU (one thread): a segment of
@@ -299,16 +344,20 @@ std::string tables(const bench::Runs& runs) {
                              "5.05, so paths are straight and the trackers are the noise; scattering: the scene's "
                              "sigma_s 5; MSE = variance of the pixel mean; mean majorant = the cells' majorant "
                              "averaged over the grid's volume, relative to the global one, i.e. the tentative "
-                             "collisions per unit length):\n\n",
+                             "collisions per unit length; collisions + cells: the loop iterations of delta and ratio "
+                             "tracking per segment from a point in the box to its face, from the majorant grid alone "
+                             "(a host model, `trackingLoopSteps`), residual ratio tracking collides at half the "
+                             "cells' max - min instead):\n\n",
                              100.0 * counter(r, "empty_voxels"));
-            s += "| cloud | estimator | majorant cell (voxels) | mean majorant | render s | MSE | work x MSE | / global |\n"
-                 "|---|---|---|---|---|---|---|---|\n";
+            s += "| cloud | estimator | majorant cell (voxels) | mean majorant | collisions + cells per segment (model) | render s | MSE | work x MSE | / global |\n"
+                 "|---|---|---|---|---|---|---|---|---|\n";
             majorantHeader = true;
         }
         const double w = counter(r, "work_x_mse");
-        s += fmt::format("| {} | {} | {} | {:.3f} | {:.3f} | {:.3g} | {:.3g} | {:.2f} |\n", kind, est,
-                         cell == "0" ? std::string("global") : cell, counter(r, "majorant_ratio"), counter(r, "render_s"),
-                         counter(r, "mse"), w, global > 0 ? w / global : 0.0);
+        s += fmt::format("| {} | {} | {} | {:.3f} | {:.1f} + {:.1f} | {:.3f} | {:.3g} | {:.3g} | {:.2f} |\n", kind, est,
+                         cell == "0" ? std::string("global") : cell, counter(r, "majorant_ratio"),
+                         counter(r, "collisions"), counter(r, "cells"), counter(r, "render_s"), counter(r, "mse"), w,
+                         global > 0 ? w / global : 0.0);
     }
     s += "\n**Density lookups per second** (shared estimator code on one CPU thread, exponential falloff "
          "segment, tau = 1.5):\n\n| estimator | Mlookups/s | lookups per estimate |\n|---|---|---|\n";
