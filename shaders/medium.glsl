@@ -29,13 +29,46 @@ layout(std430, binding = kBindingPrimMedia) readonly buffer PrimMediaBuffer { ui
 // ---- Density ----
 #include "shared/density_grid.h"
 
-// Trilinear lookup of a grid medium at world point p (shared/density_grid.h).
+// World point / direction -> the grid's unit box [0, 1]^3 (an affine map, MediumGpu::gridRow*).
+vec3 gridUnitPoint(uint mi, vec3 p) {
+    vec4 q = vec4(p, 1.0);
+    return vec3(dot(media[mi].gridRow0, q), dot(media[mi].gridRow1, q), dot(media[mi].gridRow2, q));
+}
+vec3 gridUnitDir(uint mi, vec3 d) {
+    return vec3(dot(media[mi].gridRow0.xyz, d), dot(media[mi].gridRow1.xyz, d), dot(media[mi].gridRow2.xyz, d));
+}
+
+// The lookup stencil of grid medium mi at world point p (nearest-voxel grids: one corner).
+bool gridStencilAt(uint mi, vec3 p, out GridStencil g) {
+    if (!gridStencil(media[mi].gridRes, gridUnitPoint(mi, p), g)) return false;
+    if ((media[mi].gridFlags & kGridNearest) != 0u) g.t = gridNearestWeights(g.t);
+    return true;
+}
+
+// Trilinear (or nearest) lookup of a grid medium at world point p (shared/density_grid.h).
 float gridDensityAt(uint mi, vec3 p) {
     GridStencil g;
-    if (!gridStencil(media[mi].gridRes, (p - media[mi].gridMin) / (media[mi].gridMax - media[mi].gridMin), g)) return 0.0;
+    if (!gridStencilAt(mi, p, g)) return 0.0;
     uint i = media[mi].gridOffset + g.corner, x = g.step.x, y = g.step.y, z = g.step.z;
     return gridTrilinear(g.t, gridData[i], gridData[i + x], gridData[i + y], gridData[i + x + y], gridData[i + z],
                          gridData[i + x + z], gridData[i + y + z], gridData[i + x + y + z]);
+}
+
+// Emission per unit length of a grid medium at world point p (Tungsten's voxel medium: the
+// emission grid, times the density where scale_emission_by_density).
+vec3 gridEmissionAt(uint mi, vec3 p) {
+    uint flags = media[mi].gridFlags;
+    GridStencil g;
+    if ((flags & kGridEmission) == 0u || !gridStencilAt(mi, p, g)) return vec3(0.0);
+    uint x = 3u * g.step.x, y = 3u * g.step.y, z = 3u * g.step.z;
+    vec3 e;
+    for (uint c = 0u; c < 3u; ++c) {
+        uint i = media[mi].emissionOffset + 3u * g.corner + c;
+        e[c] = gridTrilinear(g.t, gridData[i], gridData[i + x], gridData[i + y], gridData[i + x + y], gridData[i + z],
+                             gridData[i + x + z], gridData[i + y + z], gridData[i + x + y + z]);
+    }
+    if ((flags & kGridEmissionByDensity) != 0u) e *= gridDensityAt(mi, p);
+    return e;
 }
 
 #define TR_GRID_DENSITY(s, t) gridDensityAt((s).medium, (s).origin + (s).dir * (t))
@@ -79,8 +112,10 @@ TrSegment mediumSegment(uint mi, vec3 o, vec3 d, float l) {
         s.profile = makeProfile(kProfileExponential, m.density * exp(-m.falloffScale * h0),
                                 m.falloffScale * dot(d, m.falloffDir), 0.0);
     } else if (kHasGrids && m.type == kMediumGrid) {
-        vec3 inv = safeInverse(d);
-        vec3 ta = (m.gridMin - o) * inv, tb = (m.gridMax - o) * inv;
+        // Clip to the unit box in grid space (an affine map keeps the ray parameter t).
+        vec3 uo = gridUnitPoint(mi, o), ud = gridUnitDir(mi, d);
+        vec3 inv = safeInverse(ud);
+        vec3 ta = -uo * inv, tb = (vec3(1.0) - uo) * inv;
         vec3 tn = min(ta, tb), tf = max(ta, tb);
         float t0 = max(max(tn.x, tn.y), max(tn.z, 0.0));
         float t1 = min(min(tf.x, tf.y), min(tf.z, l));
@@ -103,6 +138,88 @@ TrEstimator sceneTrEstimator() {
     return TrEstimator(kTrEstimatorType, kTrLevel, LevelPmf(kTrPmfType, kTrPmfR, kTrPmfAlpha));
 }
 
+// ---- Trackers through the majorant grid ----
+// The (min, max) density over the voxels lookups in majorant cell c of medium mi may read.
+vec2 majorantCell(uint mi, ivec3 c) {
+    uvec3 r = media[mi].majorantRes;
+    uint i = media[mi].majorantOffset + 2u * ((uint(c.z) * r.y + uint(c.y)) * r.x + uint(c.x));
+    return vec2(gridData[i], gridData[i + 1u]);
+}
+
+// Steps of one tracking estimate (collisions plus cells crossed): lavapipe ends any loop after
+// 65535 iterations per SIMD group, so the loop is bounded far below that; a segment reaching the
+// bound (a majorant optical depth in the thousands) keeps the product so far.
+const uint kTrMaxGridSteps = 16384u;
+
+// Delta, ratio or residual ratio tracking of a grid segment, cell by cell: a 3-D DDA walks the
+// majorant cells the segment crosses and each piece is tracked at its own cell's majorant
+// (residual ratio: its own control and residual). Exponential transmittance only.
+vec3 trTrackGrid(uint mode, TrSegment s, inout Rng rng, inout uint lookups) {
+    vec3 result = vec3(1.0);
+    if (!(s.len > 0.0)) return result;
+    uint mi = s.medium;
+    float sMax = trMaxComponent(s.sigmaT);
+    vec3 scale = media[mi].majorantScale;
+    ivec3 res = ivec3(media[mi].majorantRes);
+    vec3 xo = gridUnitPoint(mi, s.origin) * scale;
+    vec3 xd = gridUnitDir(mi, s.dir) * scale;
+    ivec3 cell = clamp(ivec3(floor(xo)), ivec3(0), res - 1);
+    ivec3 stepDir = ivec3(sign(xd));
+    vec3 inv = safeInverse(xd);
+    vec3 tDelta = abs(inv);
+    // Parameter of the next face crossing along each axis
+    vec3 tNext = (vec3(cell) + vec3(greaterThan(xd, vec3(0.0))) - xo) * inv;
+    tNext = mix(tNext, vec3(kInfinity), equal(xd, vec3(0.0)));
+    float t = 0.0;
+    float tCell = min(min(tNext.x, tNext.y), min(tNext.z, s.len));
+    vec2 mm = majorantCell(mi, cell);
+    float control = mode == kTrEstResidualRatioTracking ? 0.5 * (mm.x + mm.y) : 0.0;
+    float mu = sMax * (mode == kTrEstResidualRatioTracking ? 0.5 * (mm.y - mm.x) : mm.y);
+    if (mode == kTrEstResidualRatioTracking) result *= exp(-s.sigmaT * (control * tCell));
+    for (uint guard = 0u; guard < kTrMaxGridSteps; ++guard) {
+        float tc = mu > 0.0 ? t - log(1.0 - rngNext(rng)) / mu : kInfinity;
+        if (tc < tCell) {
+            // A tentative collision inside the cell
+            t = tc;
+            vec3 sigma = s.sigmaT * (trDensity(s, t) - control);
+            lookups += 1u;
+            if (mode == kTrEstDeltaTracking) {
+                float xi = rngNext(rng);
+                result *= vec3(xi >= sigma.x / mu ? 1.0 : 0.0, xi >= sigma.y / mu ? 1.0 : 0.0,
+                               xi >= sigma.z / mu ? 1.0 : 0.0);
+                if (trMaxComponent(result) == 0.0) break;
+            } else {
+                result *= vec3(1.0) - sigma / mu;
+            }
+            continue;
+        }
+        // Into the next cell (the exponential steps are memoryless, so the piece restarts there)
+        t = tCell;
+        if (t >= s.len) break;
+        if (tNext.x <= tNext.y && tNext.x <= tNext.z) {
+            cell.x += stepDir.x;
+            tNext.x += tDelta.x;
+        } else if (tNext.y <= tNext.z) {
+            cell.y += stepDir.y;
+            tNext.y += tDelta.y;
+        } else {
+            cell.z += stepDir.z;
+            tNext.z += tDelta.z;
+        }
+        if (any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, res))) break;
+        tCell = min(min(tNext.x, tNext.y), min(tNext.z, s.len));
+        mm = majorantCell(mi, cell);
+        if (mode == kTrEstResidualRatioTracking) {
+            control = 0.5 * (mm.x + mm.y);
+            mu = sMax * 0.5 * (mm.y - mm.x);
+            result *= exp(-s.sigmaT * (control * max(tCell - t, 0.0)));
+        } else {
+            mu = sMax * mm.y;
+        }
+    }
+    return result;
+}
+
 // Estimated transmittance of medium mi over [0, l] with the form of the endpoint types.
 // Homogeneous media with a comb estimator (ray marching, debiased or unbiased ray marching): every
 // comb of a constant density sees the exact optical depth, so every comb estimator returns
@@ -117,8 +234,12 @@ vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, 
         return trForm3(mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
                        media[mi].sigmaT * (media[mi].density * max(l, 0.0)));
     uint lookups = 0u;
-    return trEstimate(sceneTrEstimator(), mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
-                      mediumSegment(mi, o, d, l), rng, lookups);
+    TrSegment s = mediumSegment(mi, o, d, l);
+    if (kHasGrids && media[mi].type == kMediumGrid &&
+        (kTrEstimatorType == kTrEstDeltaTracking || kTrEstimatorType == kTrEstRatioTracking ||
+         kTrEstimatorType == kTrEstResidualRatioTracking))
+        return trTrackGrid(kTrEstimatorType, s, rng, lookups);
+    return trEstimate(sceneTrEstimator(), mediumModel(mi), trFormOf(startOnSurface, endOnSurface), s, rng, lookups);
 }
 
 // ---- Medium boundaries ----
@@ -150,7 +271,9 @@ vec3 shadowTransmittance(vec3 o, vec3 d, float tMax, uint medium, bool startOnSu
         bool found = traceClosest(o, d, tMax, hit);
         float end = found ? hit.t : tMax;
         if (medium != 0u) {
-            if (!(end < kInfinity)) return vec3(0.0);  // an unbounded medium absorbs everything
+            // an unbounded medium absorbs everything; a grid ends at its box
+            bool grid = kHasGrids && media[medium - 1u].type == kMediumGrid;
+            if (!(end < kInfinity) && !grid) return vec3(0.0);
             tr *= mediumTransmittance(medium - 1u, o, d, end, startOnSurface, true, rng);
         }
         if (!found) return tr;
@@ -210,11 +333,14 @@ bool sampleDiracSegment(uint mi, vec3 o, vec3 d, float l, inout vec3 throughput,
 }
 
 // One camera segment of length l through medium mi. Returns true when the path scatters in the
-// medium: p is the scattering point and throughput carries the scattering weight; otherwise
+// medium: p is the scattering point, throughput carries the scattering weight and emitted the
+// medium's emission collected there (already times the throughput before the segment); otherwise
 // throughput carries the weight of passing to the surface at l. A zero throughput ends the path.
 bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, inout vec3 throughput, out vec3 p,
-                         inout Rng rng) {
+                         out vec3 emitted, inout Rng rng) {
     p = o;
+    emitted = vec3(0.0);
+    bool emits = kHasGrids && media[mi].type == kMediumGrid && (media[mi].gridFlags & kGridEmission) != 0u;
     TrModel model = mediumModel(mi);
     if (!fromSurface && media[mi].type == kMediumHomogeneous && trModelIsDirac(model) &&
         trMaxComponent(media[mi].sigmaS) > 0.0)
@@ -231,7 +357,7 @@ bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, ino
         float average = combSum(whole, rngNext(rng), 0u, 1u, 8u, 8.0, lookups) / 8.0;
         guideDensity = max(average, 0.1 * whole.densityMax);
     }
-    float mu = trMaxComponent(media[mi].sigmaS) > 0.0 ? trMaxComponent(whole.sigmaT) * guideDensity : 0.0;
+    float mu = (trMaxComponent(media[mi].sigmaS) > 0.0 || emits) ? trMaxComponent(whole.sigmaT) * guideDensity : 0.0;
     float sigmaBar = trSigmaBar(model);
     float u = rngNext(rng);
     if (mu > 0.0 && whole.len > 0.0) {
@@ -246,7 +372,11 @@ bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, ino
                 throughput = vec3(0.0);
                 return true;
             }
-            throughput *= sigmaS * sigmaBar * mediumTransmittance(mi, o, d, t, fromSurface, false, rng) / pdf;
+            vec3 w = mediumTransmittance(mi, o, d, t, fromSurface, false, rng) / pdf;
+            // Emission collected at the collision (Tungsten's voxel medium): the emission per unit
+            // length times T_{start,medium}(t) / pdf(t), an estimate of integral T e dt.
+            if (emits) emitted = throughput * w * gridEmissionAt(mi, p);
+            throughput *= sigmaS * sigmaBar * w;
             return true;
         }
     }

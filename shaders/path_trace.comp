@@ -27,6 +27,7 @@ layout(constant_id = kSpecLightSampling) const bool kLightSampling = true;
 layout(constant_id = kSpecTwoSided) const bool kTwoSided = true;
 layout(constant_id = kSpecFilter) const uint kFilter = kFilterTent;
 layout(constant_id = kSpecEnvironmentLight) const uint kEnvironmentLight = 0xffffffffu;
+layout(constant_id = kSpecCapLight) const uint kCapLight = 0xffffffffu;
 layout(constant_id = kSpecMaxTraceDepth) const uint kMaxTraceDepth = 4096u;
 layout(constant_id = kSpecRayEpsilon) const float kRayEpsilon = 1e-5;
 layout(constant_id = kSpecPilot) const bool kPilot = false;

@@ -108,11 +108,14 @@ uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng) {
     // The medium's own limit (its max_bounces, Tungsten's sampleDistance): no free flight after
     // more than max_bounces scattering events in a row.
     if (s.mediumScatters > media[mi].maxBounces) return 2u;
-    vec3 p;
-    bool scattered = sampleMediumSegment(mi, s.origin, s.dir, tHit, s.fromSurface, s.throughput, p, rng);
+    vec3 p, emitted;
+    bool scattered = sampleMediumSegment(mi, s.origin, s.dir, tHit, s.fromSurface, s.throughput, p, emitted, rng);
+    uint v = s.vertex;
+    // Medium emission at the collision that is vertex v counts v bounces (like light sampled from
+    // there), so max_bounces k keeps it for v <= k, as Tungsten's loop does.
+    if (kHasGrids && any(notEqual(emitted, vec3(0.0)))) addContribution(s.result, v, emitted, pmf, s.level);
     if (s.throughput == vec3(0.0)) return 2u;
     if (!scattered) return 0u;
-    uint v = s.vertex;
     if (v > s.limit) return 2u;
     s.mediumScatters += 1u;
     // This vertex's phase-sampled ray will not be traced when the medium limit ends the path next.
@@ -150,8 +153,11 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     Hit hit;
     bool found = traceClosest(s.origin, s.dir, kInfinity, hit);
     if (kHasMedia && s.medium != 0u) {
-        if (!found) return false;  // media are enclosed by their boundaries; an unbounded one absorbs all
-        uint r = mediumStep(s, hit.t, pmf, rng);
+        // Media are enclosed by their boundaries, and an unbounded one absorbs all; a grid medium
+        // is bounded by its box, so a ray may leave the scene through it (Tungsten's voxel medium).
+        bool gridMedium = kHasGrids && media[s.medium - 1u].type == kMediumGrid;
+        if (!found && !gridMedium) return false;
+        uint r = mediumStep(s, found ? hit.t : kInfinity, pmf, rng);
         if (r == 1u) return true;
         if (r == 2u) return false;
     }
@@ -161,6 +167,14 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
             float mis = (s.specularPrev || !kLightSampling) ? 1.0
                                                              : powerHeuristic(s.pdfPrev, env.pmf / (4.0 * kPi));
             addContribution(s.result, v - 1u, s.throughput * env.radiance * mis, pmf, s.level);
+        }
+        if (kCapLight != 0xffffffffu) {
+            LightGpu cap = lights[kCapLight];
+            if (dot(s.dir, cap.position) >= cap.cosCap) {
+                float pdf = cap.pmf / (2.0 * kPi * (1.0 - cap.cosCap));
+                float mis = (s.specularPrev || !kLightSampling) ? 1.0 : powerHeuristic(s.pdfPrev, pdf);
+                addContribution(s.result, v - 1u, s.throughput * cap.radiance * mis, pmf, s.level);
+            }
         }
         return false;
     }

@@ -53,6 +53,12 @@ bool sampleLight(vec3 p, inout Rng rng, out LightSample ls) {
         ls.dist = length(d);
         ls.wi = d / ls.dist;
         ls.weight = light.radiance / (ls.dist * ls.dist * light.pmf);
+    } else if (light.type == kLightCap) {
+        // Uniform in the cone of directions (Tungsten's infinite_sphere_cap)
+        ls.wi = sampleUniformCone(light.position, light.cosCap, u1, u2);
+        ls.dist = kInfinity;
+        ls.pdf = light.pmf / (2.0 * kPi * (1.0 - light.cosCap));
+        ls.weight = light.radiance / ls.pdf;
     } else if (light.type == kLightEnvironment) {
         ls.wi = sampleUniformSphere(u1, u2);
         ls.dist = kInfinity;

@@ -373,9 +373,9 @@ TEST_F(Cli, UnknownMediumType) {
     expectBadInput("render " + bad + " -o " + out("a.exr"), {"fog.json", "media[0].type", "unknown medium type"});
 }
 
-TEST_F(Cli, VdbGridWithoutOpenVdb) {
+TEST_F(Cli, VdbGridMissingFile) {
     std::string bad = write("vdb.json", R"({"media": [{"type": "voxel", "grid": {"type": "vdb", "file": "x.vdb"}}]})");
-    expectBadInput("render " + bad + " -o " + out("a.exr"), {"vdb.json", "media[0].grid.type", "OpenVDB"});
+    expectBadInput("render " + bad + " -o " + out("a.exr"), {"vdb.json", "media[0].grid.file", "x.vdb"});
 }
 
 TEST_F(Cli, UnknownMediumReference) {

@@ -28,6 +28,9 @@ FN bool gridStencil(uvec3 res, vec3 unit, OUT(GridStencil) s) {
     return true;
 }
 
+// Nearest-voxel lookups (Tungsten's exact_nearest): the weights of the stencil's closest corner.
+FN vec3 gridNearestWeights(vec3 t) { return vec3(t.x >= 0.5f ? 1.0f : 0.0f, t.y >= 0.5f ? 1.0f : 0.0f, t.z >= 0.5f ? 1.0f : 0.0f); }
+
 // vXYZ: the voxel at corner + X step.x + Y step.y + Z step.z.
 FN float gridTrilinear(vec3 t, float v000, float v100, float v010, float v110, float v001, float v101, float v011,
                        float v111) {

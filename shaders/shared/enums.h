@@ -25,11 +25,12 @@ CONST uint kBsdfForward = 4u;  // invisible medium boundary (Tungsten's "forward
 CONST uint kLightArea = 0u;  // an emissive Prim
 CONST uint kLightPoint = 1u;
 CONST uint kLightEnvironment = 2u;
+CONST uint kLightCap = 3u;  // infinite_sphere_cap: a cone of directions (LightGpu::position, cosCap)
 
 // ---- Participating media (MediumType, PhaseFunction) ----
 CONST uint kMediumHomogeneous = 0u;
 CONST uint kMediumExponential = 1u;  // density exp(-falloffScale dot(x - unitPoint, falloffDir))
-CONST uint kMediumGrid = 2u;         // voxel grid over the box [gridMin, gridMax], trilinear
+CONST uint kMediumGrid = 2u;         // voxel grid over an affinely placed box (MediumGpu::gridRow*)
 CONST uint kPhaseIsotropic = 0u;
 CONST uint kPhaseHenyeyGreenstein = 1u;
 

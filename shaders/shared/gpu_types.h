@@ -38,7 +38,8 @@ CONST uint kMaterialRefraction = 1u;  // flags: dielectric transmits
 struct LightGpu {
     vec3 position; uint type;  // point: position
     vec3 radiance; uint prim;  // area: the primitive index
-    float pmf; float cdf; float pad0; float pad1;  // light selection probability, inclusive cdf
+    float pmf; float cdf; float cosCap; float pad1;  // light selection probability, inclusive cdf;
+                                                     // cap: cosine of the half angle (position: its axis)
 };
 
 // ---- Participating media (type: kMedium*, phase: kPhase*) ----
@@ -47,12 +48,18 @@ struct MediumGpu {
     vec3 sigmaS; float density;
     vec3 falloffDir; float falloffScale;
     vec3 unitPoint; float phaseG;
-    vec3 gridMin; uint gridOffset;    // first voxel in the grid-data buffer
-    vec3 gridMax; float gridMaxDensity;
-    uvec3 gridRes; float gridMinDensity;
-    uint phase; uint maxBounces; uint pad1; uint pad2;  // maxBounces: Tungsten's per-medium limit
+    // Grids (docs/MEDIA.md): world -> unit box [0, 1]^3, the rows of an affine map
+    vec4 gridRow0; vec4 gridRow1; vec4 gridRow2;
+    uvec3 gridRes; uint gridOffset;            // first voxel in the grid-data buffer
+    uvec3 majorantRes; uint majorantOffset;    // majorant cells: (min, max) density pairs
+    vec3 majorantScale; uint gridFlags;        // cell coordinate = unit point * majorantScale; kGrid*
+    float gridMaxDensity; float gridMinDensity; uint emissionOffset; uint phase;  // emission: 3 floats a voxel
+    uint maxBounces; uint pad0; uint pad1; uint pad2;  // maxBounces: Tungsten's per-medium limit
     TrModel model;
 };
+CONST uint kGridNearest = 1u;            // nearest-voxel lookups (else trilinear)
+CONST uint kGridEmission = 2u;           // the medium emits (emissionOffset is valid)
+CONST uint kGridEmissionByDensity = 4u;  // emission times the density
 
 // Prim media: bits 0..15 the interior medium + 1, 16..30 the exterior medium + 1 (0 = vacuum);
 // kPrimMediaNone: the prim has no media keys and leaves the current medium unchanged.
@@ -61,7 +68,7 @@ CONST uint kPrimMediaNone = 0xffffffffu;
 SHADER_NAMESPACE_END
 
 #ifdef __cplusplus
-static_assert(sizeof(telescope::shader::MediumGpu) == 176);
+static_assert(sizeof(telescope::shader::MediumGpu) == 240);
 static_assert(sizeof(telescope::shader::TrModel) == 48);
 static_assert(sizeof(telescope::shader::Prim) == 64);
 static_assert(sizeof(telescope::shader::BvhNode) == 32);
@@ -108,6 +115,7 @@ CONST uint kSpecLightSampling = 10u;
 CONST uint kSpecTwoSided = 11u;
 CONST uint kSpecFilter = 12u;
 CONST uint kSpecEnvironmentLight = 13u;  // light index, or 0xffffffff for none
+CONST uint kSpecCapLight = 20u;          // the infinite_sphere_cap light index, or 0xffffffff for none
 CONST uint kSpecMaxTraceDepth = 14u;
 CONST uint kTraceDepthCap = 4096u;       // rays per path at most (a debiased level beyond adds nothing)
 CONST uint kSpecRayEpsilon = 15u;        // absolute ray offset, from the scene size

@@ -33,6 +33,17 @@ FN vec3 sampleUniformSphere(float u1, float u2) {
     return vec3(r * cos(phi), r * sin(phi), z);
 }
 
+// Uniform direction in the cone of half angle acos(cosMax) around the unit axis;
+// pdf = 1 / (2 pi (1 - cosMax)).
+FN vec3 sampleUniformCone(vec3 axis, float cosMax, float u1, float u2) {
+    float z = 1.0f - u1 * (1.0f - cosMax);
+    float r = sqrt(max(0.0f, 1.0f - z * z));
+    float phi = 2.0f * kPi * u2;
+    vec3 t, b;
+    buildFrame(axis, t, b);
+    return normalize(t * (r * cos(phi)) + b * (r * sin(phi)) + axis * z);
+}
+
 // Uniform point on a triangle (barycentrics).
 FN vec3 sampleTriangle(vec3 p0, vec3 p1, vec3 p2, float u1, float u2) {
     float su = sqrt(u1);

@@ -4,6 +4,9 @@
 #include <cmath>
 
 #include <glm/gtc/constants.hpp>
+#include <glm/gtc/matrix_access.hpp>
+
+#include "scene/density_grid.h"
 
 namespace telescope {
 
@@ -71,19 +74,42 @@ shader::MediumGpu mediumToGpu(const Medium& m, std::vector<float>& gridData) {
     g.model.a = m.transmittance.params;
     g.model.b = m.transmittance.paramsB;
     if (m.type == MediumType::Grid) {
-        // Voxels scaled by the medium density; bounds for the trackers' majorant.
+        // Voxels scaled by the medium density; the majorant grid and the bounds of the whole grid
+        // for the trackers; then the emission.
+        const DensityGrid& grid = m.grid;
+        const glm::mat4 worldToUnit = glm::inverse(grid.unitToWorld);
+        g.gridRow0 = glm::row(worldToUnit, 0);
+        g.gridRow1 = glm::row(worldToUnit, 1);
+        g.gridRow2 = glm::row(worldToUnit, 2);
+        g.gridRes = grid.resolution;
         g.gridOffset = uint32_t(gridData.size());
-        g.gridMin = m.grid.boxMin;
-        g.gridMax = m.grid.boxMax;
-        g.gridRes = m.grid.resolution;
+        DensityGrid scaled;
+        scaled.resolution = grid.resolution;
+        scaled.majorantCell = grid.majorantCell;
+        scaled.majorantCoversStencil = grid.majorantCoversStencil;
+        scaled.density.reserve(grid.density.size());
         float lo = INFINITY, hi = 0.0f;
-        for (float d : m.grid.density) {
-            gridData.push_back(d * m.density);
+        for (float d : grid.density) {
+            scaled.density.push_back(d * m.density);
             lo = std::min(lo, d * m.density);
             hi = std::max(hi, d * m.density);
         }
+        gridData.insert(gridData.end(), scaled.density.begin(), scaled.density.end());
         g.gridMinDensity = std::isfinite(lo) ? lo : 0.0f;
         g.gridMaxDensity = hi;
+        g.majorantRes = majorantResolution(grid);
+        g.majorantScale = grid.majorantCell == 0 ? glm::vec3(1.0f) : glm::vec3(grid.resolution) / float(grid.majorantCell);
+        g.majorantOffset = uint32_t(gridData.size());
+        for (glm::vec2 mm : majorantGrid(scaled)) {
+            gridData.push_back(mm.x);
+            gridData.push_back(mm.y);
+        }
+        g.gridFlags = grid.nearest ? shader::kGridNearest : 0u;
+        if (!grid.emission.empty()) {
+            g.gridFlags |= shader::kGridEmission | (grid.emissionByDensity ? shader::kGridEmissionByDensity : 0u);
+            g.emissionOffset = uint32_t(gridData.size());
+            gridData.insert(gridData.end(), grid.emission.begin(), grid.emission.end());
+        }
     }
     return g;
 }
@@ -162,6 +188,14 @@ GpuScene buildGpuScene(const Scene& scene) {
             l.position = pl.position;
             power.push_back(4.0f * glm::pi<float>() * lum);
             f.pointLights = true;
+        } else if (pl.type == LightType::Cap) {
+            // Power for light selection: the flux through the scene's disk, as for the environment.
+            l.type = uint32_t(pl.type);
+            l.position = pl.direction;
+            l.cosCap = pl.cosCap;
+            float r = 0.5f * f.sceneExtent;
+            power.push_back(lum * 2.0f * glm::pi<float>() * (1.0f - pl.cosCap) * glm::pi<float>() * r * r);
+            f.capLight = uint32_t(out.lights.size());
         } else {
             if (f.environment) continue;  // one environment; the loader rejects more
             l.type = uint32_t(pl.type);

@@ -18,6 +18,7 @@ struct SceneFeatures {
     bool pointLights = false;
     bool environment = false;
     uint32_t environmentLight = 0xffffffffu;  // index in the light table
+    uint32_t capLight = 0xffffffffu;          // the infinite_sphere_cap light, index in the light table
     uint32_t lightCount = 0;
     float sceneExtent = 1.0f;   // bounding-box diagonal of the geometry (1 when empty)
     bool media = false;         // participating media or forward (medium boundary) surfaces

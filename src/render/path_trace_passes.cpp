@@ -92,6 +92,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     feature("light sampling", in.enableLightSampling && f.lightCount > 0, "next-event estimation",
             in.enableLightSampling ? "no lights" : "enable_light_sampling is false");
     feature("environment", f.environment, "infinite_sphere emitter", "no environment emitter");
+    feature("sphere cap", f.capLight != 0xffffffffu, "infinite_sphere_cap emitter", "no infinite_sphere_cap emitter");
     feature("debias", in.debias.estimator != DebiasEstimator::None, "debias block in the integrator",
             "no debias block: plain I(k)");
     feature("media", f.media, "media or forward boundaries present", "no participating media");
@@ -115,6 +116,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecTwoSided, in.enableTwoSidedShading},
         {kSpecFilter, filterConstant(scene.camera)},
         {kSpecEnvironmentLight, f.environmentLight},
+        {kSpecCapLight, f.capLight},
         {kSpecMaxTraceDepth, std::max(shader::kTraceDepthCap, pathDepthK(in) + 1)},
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
         {kSpecPilot, plan.pilotLevel != kNoPilotLevel},

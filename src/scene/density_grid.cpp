@@ -95,9 +95,49 @@ DensityGrid linearGrid(glm::uvec3 resolution, float from, float to) {
 float sampleGrid(const DensityGrid& grid, glm::vec3 unit) {
     shader::GridStencil g;
     if (!shader::gridStencil(grid.resolution, unit, g)) return 0.0f;
+    if (grid.nearest) g.t = shader::gridNearestWeights(g.t);
     const float* v = grid.density.data() + g.corner;
     const uint32_t x = g.step.x, y = g.step.y, z = g.step.z;
     return shader::gridTrilinear(g.t, v[0], v[x], v[y], v[x + y], v[z], v[x + z], v[y + z], v[x + y + z]);
+}
+
+glm::uvec3 majorantResolution(const DensityGrid& grid) {
+    if (grid.majorantCell == 0) return glm::uvec3(1u);
+    return (grid.resolution + grid.majorantCell - 1u) / grid.majorantCell;
+}
+
+uint64_t gridFloats(const DensityGrid& grid) {
+    const glm::uvec3 m = majorantResolution(grid);
+    return grid.density.size() + grid.emission.size() + 2ull * m.x * m.y * m.z;
+}
+
+std::vector<glm::vec2> majorantGrid(const DensityGrid& grid) {
+    const glm::uvec3 res = grid.resolution, cells = majorantResolution(grid);
+    const uint32_t cell = grid.majorantCell;
+    // Voxels a lookup inside a cell may read: the cell's own and one more on each side (trilinear
+    // stencils; for nearest lookups this covers a point that rounding puts across a cell face).
+    const int32_t reach = grid.majorantCoversStencil ? 1 : 0;
+    std::vector<glm::vec2> out(size_t(cells.x) * cells.y * cells.z, glm::vec2(INFINITY, 0.0f));
+    for (uint32_t cz = 0; cz < cells.z; ++cz)
+        for (uint32_t cy = 0; cy < cells.y; ++cy)
+            for (uint32_t cx = 0; cx < cells.x; ++cx) {
+                const glm::uvec3 c(cx, cy, cz);
+                glm::ivec3 lo(0), hi(glm::ivec3(res) - 1);
+                if (cell > 0) {
+                    lo = glm::max(glm::ivec3(c * cell) - reach, glm::ivec3(0));
+                    hi = glm::min(glm::ivec3((c + 1u) * cell) - 1 + reach, glm::ivec3(res) - 1);
+                }
+                glm::vec2& mm = out[(size_t(cz) * cells.y + cy) * cells.x + cx];
+                for (int32_t z = lo.z; z <= hi.z; ++z)
+                    for (int32_t y = lo.y; y <= hi.y; ++y)
+                        for (int32_t x = lo.x; x <= hi.x; ++x) {
+                            const float d = grid.density[(size_t(z) * res.y + y) * res.x + x];
+                            mm.x = std::min(mm.x, d);
+                            mm.y = std::max(mm.y, d);
+                        }
+                if (!std::isfinite(mm.x)) mm.x = 0.0f;
+            }
+    return out;
 }
 
 }  // namespace telescope

@@ -18,6 +18,19 @@ struct ProceduralCloudSettings {
 };
 
 // fBm value noise carved by a soft ellipsoid, scaled to a maximum density of 1.
+// All grids of a scene go to one storage buffer of floats; lavapipe binds at most 128 MiB.
+inline constexpr uint64_t kMaxGridFloats = uint64_t(32) << 20;
+
+// Majorant grid cells along each axis (1 x 1 x 1 for majorantCell 0: one global majorant).
+glm::uvec3 majorantResolution(const DensityGrid& grid);
+
+// Floats the grid takes on the device: voxels, emission (3 per voxel) and majorant cells (2 each).
+uint64_t gridFloats(const DensityGrid& grid);
+
+// The majorant grid: per cell the (min, max) density over every voxel a lookup inside the cell
+// reads (its own voxels and, for trilinear lookups, one more on each side), x fastest.
+std::vector<glm::vec2> majorantGrid(const DensityGrid& grid);
+
 DensityGrid proceduralCloud(const ProceduralCloudSettings& settings);
 
 DensityGrid constantGrid(glm::uvec3 resolution, float value);

@@ -5,8 +5,11 @@
 
 #include <array>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include "scene/density_grid.h"
 #include "scene/transform.h"
+#include "scene/vdb_file.h"
 #include "shared/transmittance.h"
 
 namespace telescope::scene_reader {
@@ -131,6 +134,12 @@ Medium SceneReader::readMedium(const json& v, const std::string& key) {
         if (!grid) fail(key, "missing 'grid' (a voxel medium needs a grid)");
         m.grid = readGrid(*grid, member(key, "grid"));
         read.push_back("grid");
+        // Every grid shares one storage buffer (lavapipe binds at most 128 MiB).
+        uint64_t floats = 0;
+        for (const Medium& other : scene_.media) floats += gridFloats(other.grid);
+        if (floats + gridFloats(m.grid) > kMaxGridFloats)
+            fail(member(key, "grid"), fmt::format("the scene's grids take {} MiB, more than the {} MiB the device binds",
+                                                  (floats + gridFloats(m.grid)) * 4 >> 20, kMaxGridFloats * 4 >> 20));
     }
 
     if (const json* phase = find(v, "phase_function")) {
@@ -204,17 +213,14 @@ TransmittanceModel SceneReader::readTransmittance(const json& v, const std::stri
     return t;
 }
 
-// A grid: {"type": "procedural_cloud" | "constant", "resolution", "transform", ...}. OpenVDB files
-// ("vdb") need libopenvdb, which this build does not use.
+// A grid: {"type": "procedural_cloud" | "constant" | "linear" | "vdb", "transform", ...}.
 DensityGrid SceneReader::readGrid(const json& v, const std::string& key) {
     expectObject(v, key);
     const std::string type = typeOr(v, key, "");
-    if (type == "vdb")
-        fail(member(key, "type"), "OpenVDB grids are not supported by this build of Telescope (no libopenvdb); "
-                                  "use a \"procedural_cloud\" or \"constant\" grid");
+    if (type == "vdb") return readVdbGrid(v, key);
     if (type != "procedural_cloud" && type != "constant" && type != "linear")
         fail(member(key, "type"),
-             fmt::format("unknown grid type '{}' (expected \"procedural_cloud\", \"constant\" or \"linear\")", type));
+             fmt::format("unknown grid type '{}' (expected \"procedural_cloud\", \"constant\", \"linear\" or \"vdb\")", type));
     glm::uvec3 res(32);
     if (const json* r = find(v, "resolution")) {
         const std::string rk = member(key, "resolution");
@@ -233,12 +239,12 @@ DensityGrid SceneReader::readGrid(const json& v, const std::string& key) {
             return x;
         };
         g = linearGrid(res, value("from"), value("to"));
-        rejectUnknownKeys(v, key, {"type", "resolution", "transform", "from", "to"});
+        rejectUnknownKeys(v, key, {"type", "resolution", "transform", "from", "to", "majorant_cell"});
     } else if (type == "constant") {
         const float value = find(v, "value") ? number(v["value"], member(key, "value")) : 1.0f;
         if (value < 0.0f) fail(member(key, "value"), "must be non-negative");
         g = constantGrid(res, value);
-        rejectUnknownKeys(v, key, {"type", "resolution", "transform", "value"});
+        rejectUnknownKeys(v, key, {"type", "resolution", "transform", "value", "majorant_cell"});
     } else {
         ProceduralCloudSettings c;
         c.resolution = res;
@@ -247,17 +253,132 @@ DensityGrid SceneReader::readGrid(const json& v, const std::string& key) {
         if (const json* f = find(v, "coverage")) c.coverage = number(*f, member(key, "coverage"));
         if (!(c.frequency > 0.0f)) fail(member(key, "frequency"), "must be positive");
         g = proceduralCloud(c);
-        rejectUnknownKeys(v, key, {"type", "resolution", "transform", "seed", "frequency", "coverage"});
+        rejectUnknownKeys(v, key, {"type", "resolution", "transform", "seed", "frequency", "coverage", "majorant_cell"});
     }
-    // The grid fills the unit cube [-0.5, 0.5]^3 placed by the transform (translation and scale).
+    // The grid fills the unit cube [-0.5, 0.5]^3 placed by the transform.
     const glm::mat4 m = find(v, "transform") ? transform(v["transform"], member(key, "transform")) : glm::mat4(1.0f);
-    const glm::vec3 half = 0.5f * columnLengths(m), centre(m[3]);
-    const glm::mat3 rot = columnDirections(m);
-    if (glm::length(glm::abs(rot[0]) - glm::vec3(1, 0, 0)) + glm::length(glm::abs(rot[1]) - glm::vec3(0, 1, 0)) > 1e-4f)
-        fail(member(key, "transform"), "grids must be axis-aligned (translation and scale only)");
-    if (!(half.x > 0.0f && half.y > 0.0f && half.z > 0.0f)) fail(member(key, "transform"), "the grid box has zero size");
-    g.boxMin = centre - half;
-    g.boxMax = centre + half;
+    g.unitToWorld = m * glm::translate(glm::mat4(1.0f), glm::vec3(-0.5f));
+    readGridCommon(v, key, g);
+    return g;
+}
+
+// The keys every grid has: the majorant cell, and a placement that is not degenerate.
+void SceneReader::readGridCommon(const json& v, const std::string& key, DensityGrid& g) {
+    if (const json* f = find(v, "majorant_cell")) g.majorantCell = integer(*f, member(key, "majorant_cell"), 0, 512);
+    const float det = glm::determinant(glm::mat3(g.unitToWorld));
+    if (!(std::abs(det) > 1e-30f) || !std::isfinite(det))
+        fail(member(key, "transform"), "the grid box has zero size (the transform is singular)");
+}
+
+// Tungsten's "vdb" grid (src/core/grids/VdbGrid.cpp): a float density grid and an optional vec3
+// emission grid from an OpenVDB file, read through libtelescope_vdb.so (scene/vdb_file.h).
+DensityGrid SceneReader::readVdbGrid(const json& v, const std::string& key) {
+    const json* fileValue = find(v, "file");
+    if (!fileValue) fail(key, "missing 'file' (a vdb grid needs a .vdb file)");
+    const std::string fileKey = member(key, "file");
+    const fs::path relative = string(*fileValue, fileKey);
+    const std::string path = (relative.is_absolute() ? relative : baseDir_ / relative).string();
+
+    std::string densityName = "density", densityKey = member(key, "density_name");
+    if (const json* f = find(v, "grid_name")) {  // Tungsten's older name of density_name
+        densityName = string(*f, member(key, "grid_name"));
+        densityKey = member(key, "grid_name");
+    }
+    if (const json* f = find(v, "density_name")) densityName = string(*f, member(key, "density_name"));
+    const json* emissionValue = find(v, "emission_name");
+    const std::string emissionName = emissionValue ? string(*emissionValue, member(key, "emission_name")) : "Cd";
+    auto scalar = [&](const char* field, float fallback) {
+        const float x = find(v, field) ? number(v[field], member(key, field)) : fallback;
+        if (x < 0.0f) fail(member(key, field), "must be non-negative");
+        return x;
+    };
+    const float densityScale = scalar("density_scale", 1.0f);
+    const float emissionScale = scalar("emission_scale", 1.0f);
+    DensityGrid g;
+    g.source = "vdb";
+    g.emissionByDensity = find(v, "scale_emission_by_density")
+                              ? boolean(v["scale_emission_by_density"], member(key, "scale_emission_by_density"))
+                              : true;
+    const bool normalizeSize = find(v, "normalize_size") ? boolean(v["normalize_size"], member(key, "normalize_size")) : true;
+
+    // Tungsten's methods choose how the density between voxels is read; Telescope's transmittance
+    // estimator (integrator.transmittance_estimator) decides how it is integrated and sampled.
+    auto method = [&](const char* field, std::initializer_list<const char*> names) {
+        const std::string name = find(v, field) ? string(v[field], member(key, field)) : "exact_nearest";
+        bool known = false;
+        for (const char* n : names) known = known || name == n;
+        if (!known) {
+            std::string list;
+            for (const char* n : names) list += fmt::format("{}\"{}\"", list.empty() ? "" : ", ", n);
+            fail(member(key, field), fmt::format("unknown method '{}' (expected {})", name, list));
+        }
+        return name;
+    };
+    const std::string integration =
+        method("integration_method", {"exact_nearest", "exact_linear", "raymarching", "residual_ratio"});
+    const std::string sampling = method("sampling_method", {"exact_nearest", "exact_linear", "raymarching"});
+    g.nearest = integration == "exact_nearest";
+    if ((sampling == "exact_nearest") != g.nearest)
+        fail(member(key, "sampling_method"),
+             fmt::format("'{}' reads the density {} but integration_method '{}' reads it {}: Telescope integrates "
+                         "and samples one density field (choose both exact_nearest, or both trilinear)",
+                         sampling, sampling == "exact_nearest" ? "per nearest voxel" : "trilinearly", integration,
+                         g.nearest ? "per nearest voxel" : "trilinearly"));
+    for (const char* k : {"step_size", "supergrid_subsample"})
+        if (find(v, k)) ignore(member(key, k));
+
+    // Trilinear lookups read one voxel beyond the active box: one layer of zeros around it.
+    TelescopeVdbRequest request{};
+    request.path = path.c_str();
+    request.densityName = densityName.c_str();
+    request.emissionName = emissionName.c_str();
+    request.emissionRequired = emissionValue ? 1 : 0;
+    request.padding = g.nearest ? 0 : 1;
+    request.maxVoxels = kMaxGridFloats;
+    int32_t status = kVdbOk;
+    VdbFileData d;
+    try {
+        d = readVdbFile(request, status);
+    } catch (const std::exception& e) {
+        const std::string where = status == kVdbNoDensityGrid || status == kVdbDensityNotFloat || status == kVdbEmpty
+                                      ? densityKey
+                                  : status == kVdbNoEmissionGrid || status == kVdbEmissionNotVec3
+                                      ? member(key, "emission_name")
+                                      : fileKey;
+        fail(where, e.what());
+    }
+    g.resolution = d.res;
+    g.density = std::move(d.density);
+    for (float& x : g.density) x *= densityScale;
+    g.emission = std::move(d.emission);
+    for (float& x : g.emission) x *= emissionScale;
+
+    // Index space -> Tungsten's grid space (normalize_size: the active box scaled to a largest side
+    // of 1, centred on x and z, standing on y = 0; else the file's own voxel size and origin).
+    const glm::dvec3 diag = glm::dvec3(d.activeMax - d.activeMin + 1);
+    double scale;
+    glm::dvec3 offset;
+    if (normalizeSize) {
+        scale = 1.0 / std::max(diag.x, std::max(diag.y, diag.z));
+        offset = -(glm::dvec3(d.activeMin) * scale + glm::dvec3(diag.x, 0.0, diag.z) * (0.5 * scale));
+    } else {
+        scale = std::min(d.voxelSize.x, std::min(d.voxelSize.y, d.voxelSize.z));
+        offset = d.indexOrigin;
+    }
+    // Unit box -> index space: voxel i's centre (i + 1/2) / res is index lo + i.
+    const glm::dvec3 indexMin = glm::dvec3(d.lo) - 0.5, indexSize = glm::dvec3(d.res);
+    glm::mat4 unitToLocal(1.0f);
+    for (int a = 0; a < 3; ++a) {
+        unitToLocal[a][a] = float(indexSize[a] * scale);
+        unitToLocal[3][a] = float(indexMin[a] * scale + offset[a]);
+    }
+    const glm::mat4 config = find(v, "transform") ? transform(v["transform"], member(key, "transform")) : glm::mat4(1.0f);
+    g.unitToWorld = config * unitToLocal;
+    readGridCommon(v, key, g);
+    rejectUnknownKeys(v, key,
+                      {"type", "file", "grid_name", "density_name", "density_scale", "emission_name", "emission_scale",
+                       "scale_emission_by_density", "normalize_size", "integration_method", "sampling_method",
+                       "step_size", "supergrid_subsample", "transform", "majorant_cell"});
     return g;
 }
 

@@ -72,8 +72,19 @@ struct TransmittanceModel {
 struct DensityGrid {
     glm::uvec3 resolution{0};
     std::vector<float> density;  // x fastest
-    glm::vec3 boxMin{-0.5f}, boxMax{0.5f};  // world-space box the grid fills
-    std::string source;          // "procedural_cloud", "constant"
+    // Emission per unit length (3 floats per voxel, x fastest; empty = none), emission_scale
+    // applied; times the density where emissionByDensity (Tungsten's scale_emission_by_density).
+    std::vector<float> emission;
+    bool emissionByDensity = false;
+    bool nearest = false;        // nearest-voxel lookups (Tungsten's exact_nearest), else trilinear
+    // The unit box [0, 1]^3 (voxel centres at (i + 1/2) / res) to world space, affine.
+    glm::mat4 unitToWorld{1.0f};
+    // Majorant grid: cells of majorantCell^3 voxels (0 = one majorant for the whole grid).
+    uint32_t majorantCell = 8;
+    // Test hook (not read from scenes): false builds the majorant cells from their own voxels only,
+    // ignoring the neighbours a trilinear lookup reads: a wrong (too small) majorant on purpose.
+    bool majorantCoversStencil = true;
+    std::string source;          // "procedural_cloud", "constant", "linear", "vdb"
 };
 
 struct Medium {
@@ -98,13 +109,15 @@ enum class TransmittanceEstimatorType : uint32_t {
 };
 const char* transmittanceEstimatorName(TransmittanceEstimatorType t);
 
-enum class LightType : uint32_t { Point = shader::kLightPoint, Environment = shader::kLightEnvironment };
+enum class LightType : uint32_t { Point = shader::kLightPoint, Environment = shader::kLightEnvironment, Cap = shader::kLightCap };
 
 // Non-geometric emitters (area lights are the emissive Geometry entries).
 struct PointLikeLight {
     LightType type = LightType::Point;
     glm::vec3 position{0.0f};     // point
-    glm::vec3 intensity{0.0f};    // point: radiant intensity (W/sr); environment: radiance
+    glm::vec3 intensity{0.0f};    // point: radiant intensity (W/sr); environment, cap: radiance
+    glm::vec3 direction{0.0f, 1.0f, 0.0f};  // cap: the cone's axis (unit; light arrives from it)
+    float cosCap = -1.0f;                    // cap: cosine of the cone's half angle
     std::string name;
 };
 

@@ -593,7 +593,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"UnknownMediumType", R"({"media": [{"type": "fog"}]})", "", "media[0].type", "unknown medium type 'fog'"},
         BadInput{"MediumReference", withPrimitive(R"({"type": "sphere", "bsdf": "white", "int_medium": "fog"})"), "", "primitives[0].int_medium", "unknown medium 'fog'"},
         BadInput{"NegativeSigma", R"({"media": [{"type": "homogeneous", "sigma_a": -1}]})", "", "media[0].sigma_a", "non-negative"},
-        BadInput{"VdbGrid", R"({"media": [{"type": "voxel", "grid": {"type": "vdb", "file": "cloud.vdb"}}]})", "", "media[0].grid.type", "OpenVDB grids are not supported"},
+        BadInput{"VdbGridMissingFile", R"({"media": [{"type": "voxel", "grid": {"type": "vdb", "file": "cloud.vdb"}}]})", "", "media[0].grid.file", "cannot open VDB file"},
         BadInput{"VoxelWithoutGrid", R"({"media": [{"type": "voxel"}]})", "", "media[0]", "missing 'grid'"},
         BadInput{"UnknownTransmittance", R"({"media": [{"type": "homogeneous", "transmittance": {"type": "gamma"}}]})", "", "media[0].transmittance.type", "unknown transmittance type 'gamma'"},
         BadInput{"UnknownTransmittanceEstimator", R"({"integrator": {"transmittance_estimator": {"type": "woodcock"}}})", "", "integrator.transmittance_estimator.type", "unknown transmittance estimator 'woodcock'"},

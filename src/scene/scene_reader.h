@@ -109,6 +109,8 @@ private:
     Medium readMedium(const json& v, const std::string& key);
     TransmittanceModel readTransmittance(const json& v, const std::string& key, bool nested);
     DensityGrid readGrid(const json& v, const std::string& key);
+    DensityGrid readVdbGrid(const json& v, const std::string& key);
+    void readGridCommon(const json& v, const std::string& key, DensityGrid& g);
     int32_t mediumRef(const json& ref, const std::string& key);
     void checkEstimatorFitsMedia(const json& doc) const;
 

@@ -15,7 +15,7 @@ namespace {
 constexpr float kPi = 3.14159265358979323846f;
 
 constexpr std::string_view kUnsupportedPrimitives[] = {
-    "curves", "cylinder", "instances", "infinite_sphere_cap", "minecraft_map", "skydome", "spot"};
+    "curves", "cylinder", "instances", "minecraft_map", "skydome", "spot"};
 
 Geometry triangle(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2, const glm::vec3& normal) {
     Geometry g;
@@ -44,7 +44,7 @@ void appendParallelogram(std::vector<Geometry>& out, const glm::vec3& base, cons
 void SceneReader::readPrimitive(const json& v, const std::string& key) {
     const std::string type = requiredType(v, key);
     const std::string typeKey = member(key, "type");
-    const bool known = isOneOf({"quad", "cube", "sphere", "disk", "mesh", "point", "infinite_sphere"}, type);
+    const bool known = isOneOf({"quad", "cube", "sphere", "disk", "mesh", "point", "infinite_sphere", "infinite_sphere_cap"}, type);
     if (!known && isOneOf(kUnsupportedPrimitives, type)) fail(typeKey, fmt::format("unsupported primitive type '{}'", type));
     if (!known) fail(typeKey, fmt::format("unknown primitive type '{}'", type));
 
@@ -66,6 +66,30 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
     if (const json* e = find(v, "emission")) emission = colour(*e, member(key, "emission"));
     if (const json* p = find(v, "power")) power = colour(*p, member(key, "power"));
     if (emission && power) ignore(member(key, "emission"));
+
+    // Tungsten's infinite_sphere_cap: radiance from a cone of directions around the transformed
+    // +y axis, half angle cap_angle (degrees, 10 by default); power P is radiance P / (2 pi (1 - cos)).
+    if (type == "infinite_sphere_cap") {
+        PointLikeLight light;
+        light.type = LightType::Cap;
+        light.name = shape.name;
+        const glm::vec3 axis = transformVector(m, {0, 1, 0});
+        if (isDegenerate(axis)) fail(member(key, "transform"), "the cap's axis has zero length");
+        light.direction = glm::normalize(axis);
+        float degrees = 10.0f;
+        if (const json* a = find(v, "cap_angle")) degrees = number(*a, member(key, "cap_angle"));
+        if (!(degrees > 0.0f && degrees <= 180.0f)) fail(member(key, "cap_angle"), "must be in (0, 180] degrees");
+        light.cosCap = std::cos(degrees * kPi / 180.0f);
+        const float solidAngle = 2.0f * kPi * (1.0f - light.cosCap);
+        light.intensity = power ? *power / solidAngle : emission.value_or(glm::vec3(0.0f));
+        if (find(v, "skydome")) fail(member(key, "skydome"), "unsupported: a cap pivoting on a skydome (skydome emitters are unsupported)");
+        if (find(v, "sample")) ignore(member(key, "sample"));
+        for (const PointLikeLight& l : scene_.lights)
+            if (l.type == LightType::Cap) fail(key, "only one infinite_sphere_cap per scene is supported");
+        if (light.intensity != glm::vec3(0.0f)) scene_.lights.push_back(light);
+        ignoreUnread(v, key, {"name", "type", "transform", "emission", "power", "cap_angle", "sample"});
+        return;
+    }
 
     // Point and environment lights
     if (type == "point" || type == "infinite_sphere") {
