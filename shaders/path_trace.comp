@@ -32,6 +32,8 @@ layout(constant_id = kSpecRayEpsilon) const float kRayEpsilon = 1e-5;
 layout(constant_id = kSpecPilot) const bool kPilot = false;
 layout(constant_id = kSpecLevelSchedule) const uint kLevelSchedule = kLevelSchedulePerPixel;
 layout(constant_id = kSpecTestPmfWeight) const float kTestPmfWeight = 1.0;
+layout(constant_id = kSpecBsdfFamilies) const uint kBsdfFamilies = kFamilyAll;
+#define BSDF_FAMILIES kBsdfFamilies  // shared/bsdf.h: the glossy families this scene uses
 
 layout(std430, binding = kBindingPrims) readonly buffer PrimBuffer { Prim prims[]; };
 layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[]; };
