@@ -51,6 +51,7 @@ vec3 sampleDirectLambert(vec3 p, vec3 ng, vec3 n, vec3 albedo, uint medium, inou
     return albedo * kInvPi * value;
 }
 
+#ifdef TELESCOPE_GLOSSY
 // Next-event estimation from a glossy material (shared/bsdf.h glossy*): as sampleDirectLambert, with
 // the BSDF evaluated in the local frame (t, b, n) for the viewer direction wi (local).
 // The shadow ray starts in the medium on the light's side of the surface (prim, current medium).
@@ -74,6 +75,8 @@ vec3 sampleDirectGlossy(vec3 p, vec3 ng, vec3 n, vec3 t, vec3 b, vec3 wi, Materi
     if (traceAny(o, ls.wi, tMax)) return vec3(0.0);
     return value;
 }
+
+#endif
 
 // Next-event estimation from a scattering point p in medium mi (index), travelling along dir:
 // the phase function instead of the BSDF, MIS against phase sampling.
@@ -224,6 +227,7 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     } else if (kHasSpecular && isSpecularBsdf(m.type)) {
         s.throughput *= scatterSpecular(m, front, n, s.dir, rng);
         s.specularPrev = true;
+#ifdef TELESCOPE_GLOSSY
     } else if (kBsdfFamilies != 0u && isGlossyBsdf(m.type)) {
         // Local frame around the normal facing the viewer; a rough dielectric keeps the outward one.
         bool dielectric = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && m.type == kBsdfRoughDielectric;
@@ -245,6 +249,7 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         s.throughput *= weight;
         s.pdfPrev = pdf;
         s.specularPrev = specular;
+#endif
     } else {
         return false;  // null: black and opaque
     }

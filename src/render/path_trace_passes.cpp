@@ -111,6 +111,9 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
             "more than 2048 BVH nodes or 1024 primitives: read from storage buffers");
 
     plan.featuresOf = "path_trace";
+    // Scenes with glossy materials get the path tracer that has their code (path_trace_glossy.comp);
+    // the others keep the smaller pipeline.
+    plan.pathTraceShader = f.bsdfFamilies != 0u ? "path_trace_glossy" : "path_trace";
     plan.pathTraceSpec = {
         {kSpecMaxBounces, in.maxBounces},
         {kSpecMinBounces, in.minBounces},
@@ -152,7 +155,7 @@ class PathTracePasses : public SamplePasses {
 public:
     PathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan, const RenderBuffers& b,
                     uint32_t seed)
-        : pipeline_(context, "path_trace", shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
+        : pipeline_(context, plan.pathTraceShader, shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
                     deviceSpec(context, plan.pathTraceSpec),
                     (1u << shader::kBindingBvhUniform) | (1u << shader::kBindingPrimsUniform)) {
         pipeline_.bindBuffers(
