@@ -18,6 +18,9 @@ FN void sampleEmitterPoint(Prim pr, bool spheres, bool disks, float u1, float u2
     } else if (disks && pr.type == kPrimDisk) {
         q = sampleDisk(pr.p0, pr.n, pr.p1.x, u1, u2);
         nq = pr.n;
+    } else if (pr.type == kPrimQuad) {
+        q = sampleParallelogram(pr.p0, pr.p1, pr.p2, u1, u2);
+        nq = pr.n;
     } else {
         q = sampleTriangle(pr.p0, pr.p1, pr.p2, u1, u2);
         nq = pr.n;

@@ -12,6 +12,7 @@ SHADER_NAMESPACE_BEGIN
 CONST uint kPrimTriangle = 0u;
 CONST uint kPrimSphere = 1u;
 CONST uint kPrimDisk = 2u;
+CONST uint kPrimQuad = 3u;  // parallelogram p0 + [0,1] (p1 - p0) + [0,1] (p2 - p0), analytic
 
 // ---- Materials (BsdfType) ----
 CONST uint kBsdfLambert = 0u;

@@ -1,6 +1,6 @@
 // Ray-primitive intersection and BVH traversal, one source for the shaders and the CPU tests.
 //
-// Part 1 (always): intersectBox, intersectTriangle, intersectSphere, intersectDisk.
+// Part 1 (always): intersectBox, intersectTriangle, intersectQuad, intersectSphere, intersectDisk.
 // Part 2 (only when the includer has defined BVH_NODE and BVH_PRIM): intersectPrim,
 // traceClosest, traceAny. Before including this file the includer defines
 //   BVH_NODE(i)              the BvhNode i of the tree from buildBvh (src/scene/bvh.h),
@@ -23,7 +23,7 @@ CONST uint kBvhStackSize = 64u;
 CONST uint kNoPrim = 0xffffffffu;
 
 // Closest hit: t, leaf slot of the primitive (index for BVH_PRIM), and for triangles the
-// barycentrics of p1 and p2 (zero for spheres and disks).
+// parameters of p1 and p2 (see intersectPlanar; zero for spheres and disks).
 struct Hit {
     float t;
     uint prim;
@@ -62,11 +62,14 @@ FN bool intersectBox(vec3 lo, vec3 hi, vec3 origin, vec3 invDir, float tMin, flo
 
 // ---- Ray-triangle ----
 
-// Moller and Trumbore (1997), two-sided. bary = (b1, b2): hit = (1-b1-b2) p0 + b1 p1 + b2 p2.
-// Rays parallel to the plane and triangles that are degenerate within rounding (|det| below
-// 1e-6 of |e1| |e2| |dir|, in L1 norms) report no hit.
-FN bool intersectTriangle(vec3 origin, vec3 dir, vec3 p0, vec3 p1, vec3 p2, float tMin,
-                          float tMax, OUT(float) t, OUT(vec2) bary) {
+// Moller and Trumbore (1997), two-sided, for the triangle (quad false) or the parallelogram
+// (quad true) spanned by p0, p1, p2. bary = (b1, b2): hit = p0 + b1 (p1 - p0) + b2 (p2 - p0),
+// inside when b1, b2 >= 0 and b1 + b2 <= 1 (triangle) or b1, b2 <= 1 (parallelogram). Rays
+// parallel to the plane and shapes that are degenerate within rounding (|det| below 1e-6 of
+// |e1| |e2| |dir|, in L1 norms) report no hit. The parallelogram costs what the triangle does,
+// so a quad as one primitive halves the primitives of Tungsten's quads and cubes.
+FN bool intersectPlanar(vec3 origin, vec3 dir, vec3 p0, vec3 p1, vec3 p2, bool quad, float tMin,
+                        float tMax, OUT(float) t, OUT(vec2) bary) {
     vec3 e1 = p1 - p0;
     vec3 e2 = p2 - p0;
     vec3 pv = cross(dir, e2);
@@ -80,12 +83,22 @@ FN bool intersectTriangle(vec3 origin, vec3 dir, vec3 p0, vec3 p1, vec3 p2, floa
     if (!(b1 >= 0.0f && b1 <= 1.0f)) return false;
     vec3 qv = cross(s, e1);
     float b2 = dot(dir, qv) * invDet;
-    if (!(b2 >= 0.0f && b1 + b2 <= 1.0f)) return false;
+    if (!(b2 >= 0.0f && (quad ? b2 : b1 + b2) <= 1.0f)) return false;
     float th = dot(e2, qv) * invDet;
     if (!(th > tMin && th < tMax)) return false;
     t = th;
     bary = vec2(b1, b2);
     return true;
+}
+
+FN bool intersectTriangle(vec3 origin, vec3 dir, vec3 p0, vec3 p1, vec3 p2, float tMin,
+                          float tMax, OUT(float) t, OUT(vec2) bary) {
+    return intersectPlanar(origin, dir, p0, p1, p2, false, tMin, tMax, t, bary);
+}
+
+FN bool intersectQuad(vec3 origin, vec3 dir, vec3 p0, vec3 p1, vec3 p2, float tMin, float tMax,
+                      OUT(float) t, OUT(vec2) bary) {
+    return intersectPlanar(origin, dir, p0, p1, p2, true, tMin, tMax, t, bary);
 }
 
 // ---- Ray-sphere ----
@@ -155,12 +168,13 @@ SHADER_NAMESPACE_END
 
 SHADER_NAMESPACE_BEGIN
 
-// One primitive of any type; sphere and disk branches vanish when their constant is false.
+// One primitive of any type (triangles and quads share one test); sphere and disk branches
+// vanish when their constant is false.
 TRACE_FN bool intersectPrim(Prim p, vec3 origin, vec3 dir, float tMin, float tMax, OUT(float) t,
                             OUT(vec2) bary) {
     bary = vec2(0.0f);
-    if (p.type == kPrimTriangle)
-        return intersectTriangle(origin, dir, p.p0, p.p1, p.p2, tMin, tMax, t, bary);
+    if (p.type == kPrimTriangle || p.type == kPrimQuad)
+        return intersectPlanar(origin, dir, p.p0, p.p1, p.p2, p.type == kPrimQuad, tMin, tMax, t, bary);
     if (kHasSpheres) {
         if (p.type == kPrimSphere) return intersectSphere(origin, dir, p.p0, p.p1.x, tMin, tMax, t);
     }

@@ -41,6 +41,11 @@ FN vec3 sampleTriangle(vec3 p0, vec3 p1, vec3 p2, float u1, float u2) {
     return p0 * b0 + p1 * b1 + p2 * (1.0f - b0 - b1);
 }
 
+// Uniform point on the parallelogram p0 + [0,1] (p1 - p0) + [0,1] (p2 - p0).
+FN vec3 sampleParallelogram(vec3 p0, vec3 p1, vec3 p2, float u1, float u2) {
+    return p0 + u1 * (p1 - p0) + u2 * (p2 - p0);
+}
+
 // Uniform point on a disk of radius r around c with normal n.
 FN vec3 sampleDisk(vec3 c, vec3 n, float radius, float u1, float u2) {
     vec3 t, b;

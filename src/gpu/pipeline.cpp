@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <fstream>
+#include <future>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -207,6 +209,28 @@ void ComputePipeline::bindBuffers(const std::vector<const Buffer*>& buffers) {
         writes[i].pBufferInfo = &infos[i];
     }
     vkUpdateDescriptorSets(context_.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
+}
+
+std::vector<std::unique_ptr<ComputePipeline>> createComputePipelines(const Context& context,
+                                                                     const std::vector<PipelineDesc>& descs) {
+    std::vector<std::future<std::unique_ptr<ComputePipeline>>> pending;
+    pending.reserve(descs.size());
+    for (const PipelineDesc& d : descs)
+        pending.push_back(std::async(std::launch::async, [&context, &d] {
+            return std::make_unique<ComputePipeline>(context, d.shaderName, d.bufferCount, d.pushConstantBytes, d.spec,
+                                                     d.uniformBindings);
+        }));
+    std::vector<std::unique_ptr<ComputePipeline>> out;
+    std::exception_ptr error;
+    for (auto& f : pending) {
+        try {
+            out.push_back(f.get());
+        } catch (...) {
+            if (!error) error = std::current_exception();
+        }
+    }
+    if (error) std::rethrow_exception(error);
+    return out;
 }
 
 // ---- CommandBatch ----

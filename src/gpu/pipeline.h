@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,23 @@ private:
     VkDescriptorPool pool_ = VK_NULL_HANDLE;
     VkDescriptorSet set_ = VK_NULL_HANDLE;
 };
+
+// The arguments of one ComputePipeline, for createComputePipelines.
+struct PipelineDesc {
+    std::string shaderName;
+    uint32_t bufferCount = 0;
+    uint32_t pushConstantBytes = 0;
+    std::vector<SpecConstant> spec;
+    uint32_t uniformBindings = 0;
+};
+
+// Creates the pipelines on parallel host threads, returned in the order given. What a pipeline
+// costs to create here is CPU work (reading and specialising the SPIR-V, the driver's translation
+// to its IR), so independent pipelines overlap on the host's cores; lavapipe's LLVM compile runs
+// at the first dispatch and is not covered. The first exception thrown is rethrown once every
+// thread has finished.
+std::vector<std::unique_ptr<ComputePipeline>> createComputePipelines(const Context& context,
+                                                                     const std::vector<PipelineDesc>& descs);
 
 struct DispatchTiming {
     std::string name;

@@ -22,6 +22,12 @@ Aabb boundsOf(const Geometry& g) {
             b.extend(g.p1);
             b.extend(g.p2);
             break;
+        case GeometryType::Quad:
+            b.extend(g.p0);
+            b.extend(g.p1);
+            b.extend(g.p2);
+            b.extend(g.p1 + g.p2 - g.p0);
+            break;
         case GeometryType::Sphere:
             b.extend(g.p0 - glm::vec3(g.radius));
             b.extend(g.p0 + glm::vec3(g.radius));
@@ -40,6 +46,7 @@ Aabb boundsOf(const Geometry& g) {
 float areaOf(const Geometry& g) {
     switch (g.type) {
         case GeometryType::Triangle: return 0.5f * glm::length(glm::cross(g.p1 - g.p0, g.p2 - g.p0));
+        case GeometryType::Quad: return glm::length(glm::cross(g.p1 - g.p0, g.p2 - g.p0));
         case GeometryType::Sphere: return 4.0f * glm::pi<float>() * g.radius * g.radius;
         case GeometryType::Disk: return glm::pi<float>() * g.radius * g.radius;
     }
@@ -157,8 +164,9 @@ GpuScene buildGpuScene(const Scene& scene) {
         p.type = uint32_t(g.type);
         p.material = g.material;
         p.p0 = g.p0;
-        p.p1 = g.type == GeometryType::Triangle ? g.p1 : glm::vec3(g.radius, 0.0f, 0.0f);
-        p.p2 = g.type == GeometryType::Triangle ? g.p2 : glm::vec3(0.0f);
+        const bool planar = g.type == GeometryType::Triangle || g.type == GeometryType::Quad;
+        p.p1 = planar ? g.p1 : glm::vec3(g.radius, 0.0f, 0.0f);
+        p.p2 = planar ? g.p2 : glm::vec3(0.0f);
         p.n = g.normal;
         p.area = areaOf(g);
         p.light = -1;

@@ -249,13 +249,15 @@ private:
         push_.queueAddressHi = uint32_t(levelQueue_.address() >> 32);
         push_.queueCapacity = uint32_t(capacity);
         const uint32_t pushBytes = uint32_t(sizeof(shader::PathTracePush));
-        auto make = [&](const char* name) {
-            return std::make_unique<gpu::ComputePipeline>(context, name, 0, pushBytes, plan.pathTraceSpec);
-        };
-        levelCount_ = make("level_count");
-        levelScan_ = make("level_scan");
-        levelScatter_ = make("level_scatter");
-        pathResolve_ = make("path_resolve");
+        std::vector<std::unique_ptr<gpu::ComputePipeline>> passes = gpu::createComputePipelines(
+            context, {{"level_count", 0, pushBytes, plan.pathTraceSpec},
+                      {"level_scan", 0, pushBytes, plan.pathTraceSpec},
+                      {"level_scatter", 0, pushBytes, plan.pathTraceSpec},
+                      {"path_resolve", 0, pushBytes, plan.pathTraceSpec}});
+        levelCount_ = std::move(passes[0]);
+        levelScan_ = std::move(passes[1]);
+        levelScatter_ = std::move(passes[2]);
+        pathResolve_ = std::move(passes[3]);
     }
 
     void record(gpu::CommandBatch& batch, const shader::PathTracePush& push, bool warm) {

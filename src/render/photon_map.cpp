@@ -23,10 +23,10 @@ uint32_t hi(VkDeviceAddress a) { return uint32_t(a >> 32); }
 
 PhotonMap::PhotonMap(gpu::Context& context, uint64_t capacity) : context_(context) {
     header_ = gpu::Buffer(context, sizeof(shader::PhotonMapHeader), "photon map header");
+    std::vector<gpu::PipelineDesc> stages;
     for (uint32_t stage = shader::kGridStageClear; stage <= shader::kGridStageScatter; ++stage)
-        stages_.push_back(std::make_unique<gpu::ComputePipeline>(context, "hash_grid_build", 0,
-                                                                 uint32_t(sizeof(shader::HashGridPush)),
-                                                                 std::vector<gpu::SpecConstant>{{shader::kSpecGridStage, stage}}));
+        stages.push_back({"hash_grid_build", 0, uint32_t(sizeof(shader::HashGridPush)), {{shader::kSpecGridStage, stage}}});
+    stages_ = gpu::createComputePipelines(context, stages);
     allocate(std::max<uint64_t>(capacity, 1));
 }
 

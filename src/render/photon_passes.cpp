@@ -163,10 +163,11 @@ public:
           camera_(scene.camera),
           seed_(seed),
           map_(context, scene.integrator.photon.photonCount),
-          trace_(context, "photon_trace", shader::kSceneBindingCount, uint32_t(sizeof(shader::PhotonTracePush)),
-                 plan.photonSpec),
-          gather_(context, "gather", shader::kSceneBindingCount, uint32_t(sizeof(shader::GatherPush)),
-                  plan.photonSpec),
+          pipelines_(gpu::createComputePipelines(
+              context, {{"photon_trace", shader::kSceneBindingCount, uint32_t(sizeof(shader::PhotonTracePush)), plan.photonSpec},
+                        {"gather", shader::kSceneBindingCount, uint32_t(sizeof(shader::GatherPush)), plan.photonSpec}})),
+          trace_(*pipelines_[0]),
+          gather_(*pipelines_[1]),
           blockBuffer_(context, uint64_t(scene.camera.width) * scene.camera.height * shader::kGatherBlockVec4s * 16,
                        "gather blocks") {
         blockBuffer_.fill(0);
@@ -295,7 +296,8 @@ private:
     Camera camera_;  // resolution only (the gather's dispatch size)
     uint32_t seed_;
     PhotonMap map_;
-    gpu::ComputePipeline trace_, gather_;
+    std::vector<std::unique_ptr<gpu::ComputePipeline>> pipelines_;  // created in parallel
+    gpu::ComputePipeline &trace_, &gather_;
     gpu::Buffer blockBuffer_;  // the gather's per-pixel block sums and slice sums
     UniformBlock block_;
     shader::PhotonTracePush tracePush_{};

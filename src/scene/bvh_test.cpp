@@ -390,6 +390,39 @@ TEST(Intersect, TriangleBarycentricsOnBothSides) {
     EXPECT_FALSE(tri(vec3(0.5f, 0.5f, 1.0f), vec3(0.0f, 0.0f, -1.0f)));
 }
 
+TEST(Intersect, QuadIsTheWholeParallelogram) {
+    // A sheared parallelogram p0 + u e1 + v e2; rays along -z through random points of its
+    // plane hit exactly when 0 <= u, v <= 1, and report (u, v) as bary.
+    const vec3 p0(1.0f, 1.0f, 0.0f), e1(2.0f, 0.0f, 0.0f), e2(1.0f, 4.0f, 0.0f);
+    Random r(11);
+    int inside = 0, outside = 0, wrong = 0;
+    for (int i = 0; i < 4000; ++i) {
+        const float u = r.uniform(-0.5f, 1.5f), v = r.uniform(-0.5f, 1.5f);
+        if (std::abs(u) < 1e-3f || std::abs(v) < 1e-3f || std::abs(u - 1.0f) < 1e-3f || std::abs(v - 1.0f) < 1e-3f) continue;
+        const vec3 target = p0 + u * e1 + v * e2;
+        float t = 0.0f;
+        vec2 bary(0.0f);
+        const bool hit = shader::intersectQuad(target + vec3(0.0f, 0.0f, 2.0f), vec3(0.0f, 0.0f, -1.0f), p0, p0 + e1,
+                                               p0 + e2, 0.0f, shader::kInfinity, t, bary);
+        const bool in = u > 0.0f && u < 1.0f && v > 0.0f && v < 1.0f;
+        (in ? inside : outside) += 1;
+        if (hit != in) ++wrong;
+        if (hit) {
+            EXPECT_NEAR(t, 2.0f, 1e-5f);
+            EXPECT_NEAR(bary.x, u, 1e-5f);
+            EXPECT_NEAR(bary.y, v, 1e-5f);
+        }
+        // The triangle of the same three points covers only u + v <= 1 (control: the quad
+        // test is not the triangle test).
+        const bool tri = shader::intersectTriangle(target + vec3(0.0f, 0.0f, 2.0f), vec3(0.0f, 0.0f, -1.0f), p0,
+                                                   p0 + e1, p0 + e2, 0.0f, shader::kInfinity, t, bary);
+        if (in && u + v > 1.0f + 1e-3f) EXPECT_FALSE(tri);
+    }
+    EXPECT_EQ(wrong, 0);
+    EXPECT_GT(inside, 800);  // a quarter of the (u, v) square: about 1000
+    EXPECT_GT(outside, 2000);
+}
+
 TEST(Intersect, SphereFromOutsideAndInside) {
     vec3 c(0.0f, 0.0f, 5.0f);
     float t = 0.0f;

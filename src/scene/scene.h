@@ -48,14 +48,17 @@ inline bool photonsSupport(BsdfType t) {
            t == BsdfType::Forward || t == BsdfType::Conductor;
 }
 
-enum class GeometryType : uint32_t { Triangle = shader::kPrimTriangle, Sphere = shader::kPrimSphere, Disk = shader::kPrimDisk };
+enum class GeometryType : uint32_t {
+    Triangle = shader::kPrimTriangle, Sphere = shader::kPrimSphere, Disk = shader::kPrimDisk, Quad = shader::kPrimQuad
+};
 
 // One ray-traceable primitive in world space.
 struct Geometry {
     GeometryType type = GeometryType::Triangle;
-    glm::vec3 p0{0.0f}, p1{0.0f}, p2{0.0f};  // triangle vertices; sphere/disk: p0 = centre
+    glm::vec3 p0{0.0f}, p1{0.0f}, p2{0.0f};  // triangle vertices; quad: a corner and its two
+                                             // neighbours; sphere/disk: p0 = centre
     float radius = 0.0f;                     // sphere, disk
-    glm::vec3 normal{0.0f, 1.0f, 0.0f};      // unit geometric normal (triangle, disk); the
+    glm::vec3 normal{0.0f, 1.0f, 0.0f};      // unit geometric normal (triangle, quad, disk); the
                                              // emitting side for one-sided emission
     uint32_t material = 0;                   // index into Scene::materials
     glm::vec3 emission{0.0f};                // radiance, already converted from "power"

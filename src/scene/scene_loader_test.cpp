@@ -56,6 +56,9 @@ Scene cornellBox(const std::vector<SceneOverride>& overrides = {}) {
     return loadScene(TELESCOPE_SOURCE_DIR "/scenes/tungsten/cornell-box/scene.json", overrides);
 }
 
+// The four corners of a quad.
+std::vector<glm::vec3> corners(const Geometry& g) { return {g.p0, g.p1, g.p1 + g.p2 - g.p0, g.p2}; }
+
 std::vector<Geometry> geometryOf(const Scene& scene, const std::string& shapeName) {
     std::vector<Geometry> out;
     for (const Geometry& g : scene.geometry)
@@ -86,13 +89,13 @@ std::string withPrimitive(const std::string& primitive) {
 
 TEST(SceneLoader, CornellBoxCounts) {
     const Scene s = cornellBox();
-    EXPECT_EQ(s.geometry.size(), 36u);  // 5 walls x 2 + 2 cubes x 12 + light x 2
+    EXPECT_EQ(s.geometry.size(), 18u);  // analytic quads: 5 walls + 2 cubes x 6 + the light
     EXPECT_EQ(s.shapes.size(), 8u);
     EXPECT_EQ(s.materials.size(), 8u);
     EXPECT_TRUE(s.lights.empty());
     size_t emissive = 0;
     for (const Geometry& g : s.geometry) {
-        EXPECT_EQ(g.type, GeometryType::Triangle);
+        EXPECT_EQ(g.type, GeometryType::Quad);
         EXPECT_NEAR(glm::length(g.normal), 1.0f, 1e-5f);
         EXPECT_GT(glm::dot(glm::cross(g.p1 - g.p0, g.p2 - g.p0), g.normal), 0.0f) << "winding follows the normal";
         if (g.emission != glm::vec3(0.0f)) {
@@ -102,7 +105,7 @@ TEST(SceneLoader, CornellBoxCounts) {
             EXPECT_EQ(s.materials[g.material].type, BsdfType::Null);
         }
     }
-    EXPECT_EQ(emissive, 2u);
+    EXPECT_EQ(emissive, 1u);
 }
 
 TEST(SceneLoader, CornellBoxSettings) {
@@ -136,11 +139,12 @@ TEST(SceneLoader, CornellBoxIgnoredKeysAreListedOnce) {
 TEST(SceneLoader, CornellFloorSpansUnitSquareFacingUp) {
     // scale (2, 4, 2), rotation (0, 90, 0)
     const std::vector<Geometry> floor = geometryOf(cornellBox(), "floor");
-    ASSERT_EQ(floor.size(), 2u);
+    ASSERT_EQ(floor.size(), 1u);
     glm::vec3 lo(1e9f), hi(-1e9f);
     for (const Geometry& g : floor) {
+        EXPECT_EQ(g.type, GeometryType::Quad);
         expectVec(g.normal, {0, 1, 0});
-        for (const glm::vec3& p : {g.p0, g.p1, g.p2}) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
+        for (const glm::vec3& p : corners(g)) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
     }
     expectVec(lo, {-1, 0, -1});
     expectVec(hi, {1, 0, 1});
@@ -160,12 +164,13 @@ TEST(SceneLoader, CornellCubesAreClosedWithOutwardNormals) {
     const Scene s = cornellBox();
     for (const char* name : {"shortBox", "tallBox"}) {
         const std::vector<Geometry> box = geometryOf(s, name);
-        ASSERT_EQ(box.size(), 12u) << name;
+        ASSERT_EQ(box.size(), 6u) << name;
         glm::vec3 centre(0.0f);
-        for (const Geometry& g : box) centre += (g.p0 + g.p1 + g.p2) / 36.0f;
-        for (const Geometry& g : box) EXPECT_GT(glm::dot((g.p0 + g.p1 + g.p2) / 3.0f - centre, g.normal), 0.0f) << name;
+        for (const Geometry& g : box) centre += (g.p1 + g.p2) / 12.0f;  // face centres (p1 + p2) / 2
+        for (const Geometry& g : box) EXPECT_GT(glm::dot((g.p1 + g.p2) / 2.0f - centre, g.normal), 0.0f) << name;
         float lowest = 1e9f;
-        for (const Geometry& g : box) lowest = std::min({lowest, g.p0.y, g.p1.y, g.p2.y});
+        for (const Geometry& g : box)
+            for (const glm::vec3& p : corners(g)) lowest = std::min(lowest, p.y);
         EXPECT_NEAR(lowest, 0.0f, 1e-4f) << name << " stands on the floor";
     }
 }
@@ -174,7 +179,7 @@ TEST(SceneLoader, CornellCubesAreClosedWithOutwardNormals) {
 
 TEST(BundledScenes, CornellBoxIsTheTungstenGeometryAt256) {
     const Scene s = loadScene(TELESCOPE_SOURCE_DIR "/scenes/cornell-box.json");
-    EXPECT_EQ(s.geometry.size(), 36u);
+    EXPECT_EQ(s.geometry.size(), 18u);
     EXPECT_EQ(s.camera.width, 256u);
     EXPECT_EQ(s.camera.height, 256u);
     EXPECT_EQ(s.renderer.spp, 16u);
@@ -188,10 +193,10 @@ TEST(BundledScenes, CornellBoxIsTheTungstenGeometryAt256) {
 
 TEST(BundledScenes, FurnaceIsAClosedInwardEmittingBox) {
     const Scene s = loadScene(TELESCOPE_SOURCE_DIR "/scenes/furnace.json");
-    ASSERT_EQ(s.geometry.size(), 12u);
+    ASSERT_EQ(s.geometry.size(), 6u);
     EXPECT_TRUE(s.ignoredKeys.empty());
     for (const Geometry& g : s.geometry) {
-        const glm::vec3 centroid = (g.p0 + g.p1 + g.p2) / 3.0f;
+        const glm::vec3 centroid = (g.p1 + g.p2) / 2.0f;
         EXPECT_LT(glm::dot(centroid, g.normal), 0.0f) << "faces the camera at the origin";
         expectVec(g.emission, glm::vec3(1.0f));
         expectVec(s.materials[g.material].albedo, glm::vec3(0.5f));
@@ -205,7 +210,7 @@ TEST(BundledScenes, PointPlane) {
     ASSERT_EQ(s.lights.size(), 1u);
     expectRelative(s.lights[0].intensity, glm::vec3(1.0f), 1e-6f);
     expectVec(s.lights[0].position, {0, 1, 0});
-    ASSERT_EQ(s.geometry.size(), 2u);
+    ASSERT_EQ(s.geometry.size(), 1u);
     expectVec(s.geometry[0].normal, {0, 1, 0});
     expectVec(s.camera.forward, {0, -1, 0});
 }
@@ -216,9 +221,8 @@ TEST(SceneLoader, PowerToRadianceOnQuad) {
     // Tungsten's volumetric-caustic light: power (34, 24, 8) on 0.005 x 0.004
     const Scene s = load(withPrimitive(R"({"type": "quad", "bsdf": "white", "power": [34, 24, 8],
         "transform": {"scale": [0.005, 1, 0.004]}})"));
-    ASSERT_EQ(s.geometry.size(), 2u);
+    ASSERT_EQ(s.geometry.size(), 1u);
     expectRelative(s.geometry[0].emission, {541127, 381972, 127324}, 1e-3f);
-    expectRelative(s.geometry[1].emission, {541127, 381972, 127324}, 1e-3f);
 }
 
 TEST(SceneLoader, PowerWinsOverEmission) {
@@ -253,7 +257,7 @@ TEST(SceneLoader, DiskFacesLocalYWithRadiusFromXZ) {
 TEST(SceneLoader, CubePowerUsesTheWholeSurface) {
     const Scene s = load(withPrimitive(R"({"type": "cube", "bsdf": "white", "power": 1,
         "transform": {"scale": [1, 2, 3]}})"));
-    ASSERT_EQ(s.geometry.size(), 12u);
+    ASSERT_EQ(s.geometry.size(), 6u);
     const float area = 2.0f * (1 * 2 + 2 * 3 + 3 * 1);
     for (const Geometry& g : s.geometry) expectRelative(g.emission, glm::vec3(1.0f / (kPi * area)), 1e-5f);
 }
@@ -332,13 +336,13 @@ TEST(SceneLoader, BsdfSharingAndDefaults) {
         "primitives": [{"type": "quad", "bsdf": "glass"}, {"type": "sphere", "bsdf": "glass"},
                        {"type": "quad", "bsdf": {"type": "mirror", "albedo": [0.1, 0.2, 0.3], "bump": "b.png"}}]})");
     ASSERT_EQ(s.materials.size(), 2u);  // one per bsdf used
-    EXPECT_EQ(s.geometry[0].material, s.geometry[2].material);
+    EXPECT_EQ(s.geometry[0].material, s.geometry[1].material);
     const Material& glass = s.materials[s.geometry[0].material];
     EXPECT_EQ(glass.type, BsdfType::Dielectric);
     EXPECT_FLOAT_EQ(glass.ior, 1.5f);
     EXPECT_TRUE(glass.enableRefraction);
     expectVec(glass.albedo, glm::vec3(1.0f));
-    expectVec(s.materials[s.geometry[3].material].albedo, {0.1f, 0.2f, 0.3f});
+    expectVec(s.materials[s.geometry[2].material].albedo, {0.1f, 0.2f, 0.3f});
     EXPECT_TRUE(hasIgnored(s, "primitives[2].bsdf.bump"));
 }
 
@@ -355,12 +359,12 @@ TEST(SceneLoader, Conductors) {
     EXPECT_FLOAT_EQ(cu.roughness, 0.1f);
     expectVec(cu.eta, {0.2004376970f, 0.9240334304f, 1.1022119527f});
     expectVec(cu.k, {3.9129485033f, 2.4528477015f, 2.1421879552f});
-    const Material& gold = s.materials[s.geometry[2].material];
+    const Material& gold = s.materials[s.geometry[1].material];
     EXPECT_EQ(gold.type, BsdfType::Conductor);
     expectVec(gold.eta, {0.1431189557f, 0.3749570432f, 1.4424785571f});
     expectVec(gold.k, {3.9831604247f, 2.3857207478f, 1.6032152899f});
     expectVec(gold.albedo, glm::vec3(0.5f));
-    const Material& custom = s.materials[s.geometry[4].material];
+    const Material& custom = s.materials[s.geometry[2].material];
     EXPECT_EQ(custom.distribution, shader::kMicrofacetBeckmann);
     EXPECT_FLOAT_EQ(custom.roughness, 0.25f);
     expectVec(custom.eta, {1, 2, 3});
@@ -382,17 +386,17 @@ TEST(SceneLoader, PlasticsOrenNayarRoughDielectric) {
     EXPECT_FLOAT_EQ(p.ior, 1.5f);
     EXPECT_FLOAT_EQ(p.thickness, 1.0f);
     expectVec(p.sigmaA, glm::vec3(0.0f));
-    const Material& rp = s.materials[s.geometry[2].material];
+    const Material& rp = s.materials[s.geometry[1].material];
     EXPECT_EQ(rp.type, BsdfType::RoughPlastic);
     EXPECT_FLOAT_EQ(rp.ior, 1.3f);
     EXPECT_FLOAT_EQ(rp.thickness, 2.0f);
     expectVec(rp.sigmaA, {0.1f, 0.2f, 0.3f});
     EXPECT_EQ(rp.distribution, shader::kMicrofacetBeckmann);
     EXPECT_FLOAT_EQ(rp.roughness, 0.3f);
-    const Material& on = s.materials[s.geometry[4].material];
+    const Material& on = s.materials[s.geometry[2].material];
     EXPECT_EQ(on.type, BsdfType::OrenNayar);
     EXPECT_FLOAT_EQ(on.roughness, 1.0f);
-    const Material& rd = s.materials[s.geometry[6].material];
+    const Material& rd = s.materials[s.geometry[3].material];
     EXPECT_EQ(rd.type, BsdfType::RoughDielectric);
     EXPECT_FLOAT_EQ(rd.roughness, 0.1f);
     EXPECT_EQ(rd.distribution, shader::kMicrofacetGGX);

@@ -27,14 +27,16 @@ Geometry triangle(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
     return g;
 }
 
-// Two triangles for the parallelogram base + [0,1] e0 + [0,1] e1, wound so that
-// cross(p1 - p0, p2 - p0) points along the given unit normal.
+// One analytic quad for the parallelogram base + [0,1] e0 + [0,1] e1 (Tungsten's quad and cube
+// faces are analytic too), its edges ordered so that cross(p1 - p0, p2 - p0) points along the
+// given unit normal.
 void appendParallelogram(std::vector<Geometry>& out, const glm::vec3& base, const glm::vec3& e0,
                          const glm::vec3& e1, const glm::vec3& normal) {
     const glm::vec3 a = glm::dot(glm::cross(e0, e1), normal) >= 0.0f ? e0 : e1;
     const glm::vec3 b = a == e0 ? e1 : e0;
-    out.push_back(triangle(base, base + a, base + a + b, normal));
-    out.push_back(triangle(base, base + a + b, base + b, normal));
+    Geometry g = triangle(base, base + a, base + b, normal);
+    g.type = GeometryType::Quad;
+    out.push_back(g);
 }
 
 }  // namespace

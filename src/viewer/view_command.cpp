@@ -98,8 +98,8 @@ float pivotDistance(const Scene& scene) {
     for (const Geometry& g : scene.geometry) {
         const glm::vec3 r(g.radius);
         for (glm::vec3 p : {g.p0 - r, g.p0 + r}) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
-        if (g.type == GeometryType::Triangle)
-            for (glm::vec3 p : {g.p1, g.p2}) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
+        if (g.type == GeometryType::Triangle || g.type == GeometryType::Quad)
+            for (glm::vec3 p : {g.p1, g.p2, g.p1 + g.p2 - g.p0}) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
     }
     if (lo.x > hi.x) return 1.0f;
     const float along = glm::dot(0.5f * (lo + hi) - scene.camera.position, scene.camera.forward);

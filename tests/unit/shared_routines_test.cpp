@@ -183,9 +183,17 @@ TEST(SharedEmitter, PointsAreUniformOnEachPrimType) {
     disk.p1 = vec3(2.0f, 0, 0);
     disk.n = normalize(vec3(0, 1, 1));
 
+    Prim quad{};
+    quad.type = kPrimQuad;
+    quad.p0 = vec3(1, 1, 1);
+    quad.p1 = vec3(3, 1, 1);  // edges (2, 0, 0) and (1, 4, 0): a sheared parallelogram
+    quad.p2 = vec3(2, 5, 1);
+    quad.n = vec3(0, 0, 1);
+
     Rng rng = rngCreate(3, 1, 4);
     const int n = 200000;
     vec3 sumTri(0.0f), sumSphere(0.0f);
+    double sumQuadY = 0.0, sumQuadYY = 0.0, sumHalfY = 0.0;
     double sumR2 = 0.0;
     for (int i = 0; i < n; ++i) {
         vec3 q, nq;
@@ -206,6 +214,17 @@ TEST(SharedEmitter, PointsAreUniformOnEachPrimType) {
         const float r2 = dot(q - disk.p0, q - disk.p0);
         ASSERT_LE(r2, 4.0f + 1e-4f);
         sumR2 += r2;
+        sampleEmitterPoint(quad, true, true, rngNext(rng), rngNext(rng), q, nq);
+        ASSERT_EQ(nq, quad.n);
+        ASSERT_NEAR(q.z, 1.0f, 1e-6f);
+        const float v = (q.y - 1.0f) / 4.0f, u = (q.x - 1.0f - v) / 2.0f;  // edge coordinates
+        ASSERT_GE(u, -1e-5f);
+        ASSERT_LE(u, 1.0f + 1e-5f);
+        ASSERT_GE(v, -1e-5f);
+        ASSERT_LE(v, 1.0f + 1e-5f);
+        sumQuadY += q.y;
+        sumQuadYY += double(q.y) * q.y;
+        sumHalfY += sampleTriangle(quad.p0, quad.p1, quad.p2, rngNext(rng), rngNext(rng)).y;
     }
     // Means: the centroid (2/3, 1) with per-axis sd <= 0.71, the centre, and E[r^2] = R^2 / 2
     // (uniform in area; sd of r^2 = R^2 / sqrt(12)); bounds 5 sigma / sqrt(n).
@@ -216,6 +235,12 @@ TEST(SharedEmitter, PointsAreUniformOnEachPrimType) {
     EXPECT_NEAR(sumR2 / n, 2.0, 4.0 / std::sqrt(12.0) * k);
     EXPECT_GT(std::abs(sumR2 / n - 4.0 / 3.0), 4.0 / std::sqrt(12.0) * k)
         << "control: E[r^2] of points uniform in radius (R^2 / 3) is rejected";
+    // Quad: y = 1 + 4v with v uniform, so E[y] = 3 and E[y^2] = 9 + 16/12 (sd of y <= 1.16,
+    // of y^2 < 9).
+    EXPECT_NEAR(sumQuadY / n, 3.0, 4.0 / std::sqrt(12.0) * k);
+    EXPECT_NEAR(sumQuadYY / n, 9.0 + 16.0 / 12.0, 9.0 * k);
+    EXPECT_GT(std::abs(sumHalfY / n - 3.0), 4.0 / std::sqrt(12.0) * k)
+        << "control: points on the triangle of the same three points (one half) are rejected";
 }
 
 // ---- Sample sums ----
