@@ -111,7 +111,7 @@ void main() {
             kernelDifference = f * sums.difference;
             break;
         }
-        if (!kHasSpecular || (m.type != kBsdfMirror && m.type != kBsdfDielectric)) break;  // null
+        if (!kHasSpecular || !isSpecularBsdf(m.type)) break;  // null
         throughput *= scatterSpecular(m, front, n, dir, rng);
         origin = offsetRayOrigin(p, ng, dir);
     }

@@ -51,6 +51,33 @@ vec3 sampleDirectLambert(vec3 p, vec3 ng, vec3 n, vec3 albedo, uint medium, inou
     return albedo * kInvPi * value;
 }
 
+#ifdef TELESCOPE_GLOSSY
+// Next-event estimation from a glossy material (shared/bsdf.h glossy*): as sampleDirectLambert, with
+// the BSDF evaluated in the local frame (t, b, n) for the viewer direction wi (local).
+// The shadow ray starts in the medium on the light's side of the surface (prim, current medium).
+vec3 sampleDirectGlossy(vec3 p, vec3 ng, vec3 n, vec3 t, vec3 b, vec3 wi, MaterialGpu m, uint prim, uint medium,
+                        inout Rng rng, out uint crossings) {
+    crossings = 0u;
+    LightSample ls;
+    if (!sampleLight(p, rng, ls)) return vec3(0.0);
+    vec3 wo = vec3(dot(ls.wi, t), dot(ls.wi, b), dot(ls.wi, n));
+    if (wo.z == 0.0) return vec3(0.0);
+    vec3 f = glossyEval(m, wi, wo);
+    if (!any(greaterThan(f, vec3(0.0)))) return vec3(0.0);
+    float mis = ls.pdf > 0.0 ? powerHeuristic(ls.pdf, glossyPdf(m, wi, wo)) : 1.0;
+    vec3 value = f * ls.weight * mis;
+    vec3 o = offsetRayOrigin(p, ng, ls.wi);
+    float tMax = ls.dist < kInfinity ? max(ls.dist - length(o - p), 0.0) : kInfinity;
+    if (kHasMedia) {
+        uint shadowMedium = mediumAcross(prim, ng, ls.wi, medium);
+        return value * shadowTransmittance(o, ls.wi, tMax, shadowMedium, true, rng, crossings);
+    }
+    if (traceAny(o, ls.wi, tMax)) return vec3(0.0);
+    return value;
+}
+
+#endif
+
 // Next-event estimation from a scattering point p in medium mi (index), travelling along dir:
 // the phase function instead of the BSDF, MIS against phase sampling (withMis false: the path ends
 // here, so no phase-sampled ray will find the light and light sampling takes the whole weight).
@@ -222,9 +249,32 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         s.pdfPrev = cosO * kInvPi;
         s.throughput *= m.albedo;
         s.specularPrev = false;
-    } else if (kHasSpecular && (m.type == kBsdfMirror || m.type == kBsdfDielectric)) {
+    } else if (kHasSpecular && isSpecularBsdf(m.type)) {
         s.throughput *= scatterSpecular(m, front, n, s.dir, rng);
         s.specularPrev = true;
+#ifdef TELESCOPE_GLOSSY
+    } else if (kBsdfFamilies != 0u && isGlossyBsdf(m.type)) {
+        // Local frame around the normal facing the viewer; a rough dielectric keeps the outward one.
+        bool dielectric = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && m.type == kBsdfRoughDielectric;
+        if (!front && !kTwoSided && !dielectric) return false;
+        vec3 nf = dielectric ? ng : n;
+        vec3 t, b;
+        buildFrame(nf, t, b);
+        vec3 wi = vec3(dot(-s.dir, t), dot(-s.dir, b), dot(-s.dir, nf));
+        if (kLightSampling && kLightCount > 0u) {
+            uint crossings;
+            vec3 direct = sampleDirectGlossy(p, ng, nf, t, b, wi, m, hit.prim, s.medium, rng, crossings);
+            addContribution(s.result, v + crossings, s.throughput * direct, pmf, s.level);
+        }
+        vec3 wo, weight;
+        float pdf;
+        bool specular;
+        if (!glossySample(m, wi, rng, wo, weight, pdf, specular)) return false;
+        s.dir = normalize(t * wo.x + b * wo.y + nf * wo.z);
+        s.throughput *= weight;
+        s.pdfPrev = pdf;
+        s.specularPrev = specular;
+#endif
     } else {
         return false;  // null: black and opaque
     }

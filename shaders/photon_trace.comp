@@ -72,7 +72,7 @@ void main() {
             dir = sampleCosineHemisphere(n, rngNext(rng), rngNext(rng));
             if (dot(dir, n) <= 0.0) return;
             scale = m.albedo;
-        } else if (kHasSpecular && (m.type == kBsdfMirror || m.type == kBsdfDielectric)) {
+        } else if (kHasSpecular && isSpecularBsdf(m.type)) {
             scale = scatterSpecular(m, front, n, dir, rng);
         } else {
             return;  // null: black and opaque

@@ -20,6 +20,26 @@ CONST uint kBsdfMirror = 1u;
 CONST uint kBsdfDielectric = 2u;
 CONST uint kBsdfNull = 3u;
 CONST uint kBsdfForward = 4u;  // invisible medium boundary (Tungsten's "forward")
+CONST uint kBsdfConductor = 5u;       // smooth conductor: mirror weighted by the conductor Fresnel term
+CONST uint kBsdfRoughConductor = 6u;  // microfacet conductor (shared/microfacet.h)
+CONST uint kBsdfPlastic = 7u;         // smooth coat over a diffuse substrate (shared/layered.h)
+CONST uint kBsdfRoughPlastic = 8u;    // microfacet coat over a diffuse substrate
+CONST uint kBsdfOrenNayar = 9u;       // rough diffuse
+CONST uint kBsdfRoughDielectric = 10u;  // microfacet dielectric, reflection and refraction
+
+// Families of non-delta materials a scene may lack (bits of the kSpecBsdfFamilies specialisation
+// constant): the path tracer folds out every family the scene does not use.
+CONST uint kFamilyRoughConductor = 1u;
+CONST uint kFamilyPlastic = 2u;
+CONST uint kFamilyRoughPlastic = 4u;
+CONST uint kFamilyOrenNayar = 8u;
+CONST uint kFamilyRoughDielectric = 16u;
+CONST uint kFamilyAll = 0xffffffffu;
+
+// Microfacet distributions (Tungsten's "distribution": "beckmann", "phong", "ggx")
+CONST uint kMicrofacetBeckmann = 0u;
+CONST uint kMicrofacetPhong = 1u;
+CONST uint kMicrofacetGGX = 2u;
 
 // ---- Lights (LightType for the point-like ones; area lights are emissive prims) ----
 CONST uint kLightArea = 0u;  // an emissive Prim

@@ -28,7 +28,9 @@ struct BvhNode {
 // ---- Materials (type: kBsdf*) ----
 struct MaterialGpu {
     vec3 albedo; uint type;
-    float ior; uint flags; float pad0; float pad1;
+    float ior; uint flags; float roughness; uint distribution;  // roughness, kMicrofacet*: microfacet types
+    vec3 eta; float diffuseFresnel;    // conductors: complex index eta + i k; plastics: Fdr,
+    vec3 k; float substrateWeight;     // k = tau = thickness sigma_a, mean(albedo) exp(-2 mean(tau)) (layered.h)
 };
 CONST uint kMaterialRefraction = 1u;  // flags: dielectric transmits
 
@@ -72,7 +74,7 @@ static_assert(sizeof(telescope::shader::MediumGpu) == 240);
 static_assert(sizeof(telescope::shader::TrModel) == 48);
 static_assert(sizeof(telescope::shader::Prim) == 64);
 static_assert(sizeof(telescope::shader::BvhNode) == 32);
-static_assert(sizeof(telescope::shader::MaterialGpu) == 32);
+static_assert(sizeof(telescope::shader::MaterialGpu) == 64);
 static_assert(sizeof(telescope::shader::LightGpu) == 48);
 #endif
 
@@ -123,6 +125,7 @@ CONST uint kSpecPilot = 16u;             // pmf pilot: every sample takes the le
 CONST uint kSpecLevelSchedule = 17u;     // kLevelSchedule*: how per-sample levels are laid out on lanes
 CONST uint kSpecTestPmfWeight = 18u;     // test-only: scales every 1 / p(j) (debias.test_pmf_weight)
 CONST uint kSpecSceneInUniforms = 19u;   // BVH nodes and primitives read from the uniform bindings
+CONST uint kSpecBsdfFamilies = 21u;     // kFamily* bits: the non-delta material families present
 
 // Participating media, ids 32..47 (shaders/medium.glsl).
 CONST uint kSpecHasMedia = 32u;          // media or forward (index-matched) boundaries present

@@ -1,7 +1,10 @@
 #include "render/gpu_scene.h"
 
+#include "shared/bsdf.h"
+
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 #include <glm/gtc/constants.hpp>
 #include <glm/gtc/matrix_access.hpp>
@@ -114,19 +117,54 @@ shader::MediumGpu mediumToGpu(const Medium& m, std::vector<float>& gridData) {
     return g;
 }
 
+shader::MaterialGpu gpuMaterial(const Material& m, double diffuseFresnel) {
+    shader::MaterialGpu g{};
+    g.albedo = m.albedo;
+    g.type = uint32_t(m.type);
+    g.ior = m.ior;
+    g.flags = m.enableRefraction ? shader::kMaterialRefraction : 0u;
+    g.roughness = m.roughness;
+    g.distribution = m.distribution;
+    g.eta = m.eta;
+    g.k = m.k;
+    if (m.type == BsdfType::Plastic || m.type == BsdfType::RoughPlastic) {
+        g.diffuseFresnel = float(diffuseFresnel < 0.0 ? plasticDiffuseFresnel(m.ior) : diffuseFresnel);
+        g.k = m.thickness * m.sigmaA;  // tau
+        g.substrateWeight = (m.albedo.x + m.albedo.y + m.albedo.z) / 3.0f * std::exp(-2.0f * (g.k.x + g.k.y + g.k.z) / 3.0f);
+    }
+    return g;
+}
+
+double plasticDiffuseFresnel(float ior) {
+    // Trapezoid rule in mu^2 with a million steps, as Tungsten computes it, in double precision.
+    const int n = 1000000;
+    float cosT;
+    double sum = 0.0, fb = shader::fresnelDielectric(0.0f, 1.0f / ior, cosT);
+    for (int i = 1; i <= n; ++i) {
+        const double fa = shader::fresnelDielectric(std::min(float(std::sqrt(double(i) / n)), 1.0f), 1.0f / ior, cosT);
+        sum += (fa + fb) * (0.5 / n);
+        fb = fa;
+    }
+    return sum;
+}
+
 GpuScene buildGpuScene(const Scene& scene) {
     GpuScene out;
     SceneFeatures& f = out.features;
 
     // ---- Materials ----
+    std::map<float, double> diffuseFresnelByIor;
     for (const Material& m : scene.materials) {
-        shader::MaterialGpu g{};
-        g.albedo = m.albedo;
-        g.type = uint32_t(m.type);
-        g.ior = m.ior;
-        g.flags = m.enableRefraction ? shader::kMaterialRefraction : 0u;
+        double diffuseFresnel = 0.0;  // plastics only; one computation per index of refraction
+        if (m.type == BsdfType::Plastic || m.type == BsdfType::RoughPlastic) {
+            auto [it, added] = diffuseFresnelByIor.try_emplace(m.ior, 0.0);
+            if (added) it->second = plasticDiffuseFresnel(m.ior);
+            diffuseFresnel = it->second;
+        }
+        const shader::MaterialGpu g = gpuMaterial(m, diffuseFresnel);
         out.materials.push_back(g);
-        if (m.type == BsdfType::Mirror || m.type == BsdfType::Dielectric) f.specular = true;
+        if (shader::isSpecularBsdf(uint32_t(m.type))) f.specular = true;
+        f.bsdfFamilies |= shader::bsdfFamily(uint32_t(m.type));
         if (m.type == BsdfType::Forward) f.media = true;
     }
     if (out.materials.empty()) out.materials.push_back({});  // keep the buffer non-empty

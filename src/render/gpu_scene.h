@@ -13,7 +13,8 @@ namespace telescope {
 struct SceneFeatures {
     bool spheres = false;
     bool disks = false;
-    bool specular = false;      // mirror or dielectric materials
+    bool specular = false;      // mirror, dielectric or conductor materials
+    uint32_t bsdfFamilies = 0;  // shader::kFamily* bits of the glossy materials present
     bool areaLights = false;
     bool pointLights = false;
     bool environment = false;
@@ -26,6 +27,13 @@ struct SceneFeatures {
     uint32_t mediumCount = 0;
     bool fitsUniforms = false;  // nodes and prims fit the path tracer's uniform bindings
 };
+
+// A plastic's coat reflects this fraction of the cosine-weighted light reaching it from inside
+// (2 x the integral of F(mu) mu over [0, 1], total internal reflection included).
+double plasticDiffuseFresnel(float ior);
+
+// A material as the shaders see it (diffuseFresnel < 0: computed here for plastics).
+shader::MaterialGpu gpuMaterial(const Material& m, double diffuseFresnel = -1.0);
 
 struct GpuScene {
     std::vector<shader::Prim> prims;          // BVH leaf order

@@ -1,6 +1,7 @@
 // The path tracer's passes: one path_trace dispatch per unit, several samples per pixel each.
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include <fmt/format.h>
 #include <glm/gtc/constants.hpp>
@@ -88,7 +89,17 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     };
     feature("spheres", f.spheres, "sphere primitives present", "no sphere primitives");
     feature("disks", f.disks, "disk primitives present", "no disk primitives");
-    feature("specular", f.specular, "mirror or dielectric materials present", "no mirror or dielectric materials");
+    feature("specular", f.specular, "mirror, dielectric or conductor materials present",
+            "no mirror, dielectric or conductor materials");
+    // Glossy material families (shared/bsdf.h): each one the scene lacks is folded out.
+    for (const auto& [bit, name, yes, no] :
+         {std::tuple{shader::kFamilyRoughConductor, "rough_conductor", "rough_conductor materials present", "no rough_conductor materials"},
+          std::tuple{shader::kFamilyPlastic, "plastic", "plastic materials present", "no plastic materials"},
+          std::tuple{shader::kFamilyRoughPlastic, "rough_plastic", "rough_plastic materials present", "no rough_plastic materials"},
+          std::tuple{shader::kFamilyOrenNayar, "oren_nayar", "oren_nayar materials present", "no oren_nayar materials"},
+          std::tuple{shader::kFamilyRoughDielectric, "rough_dielectric", "rough_dielectric materials present",
+                     "no rough_dielectric materials"}})
+        feature(name, (f.bsdfFamilies & bit) != 0u, yes, no);
     feature("light sampling", in.enableLightSampling && f.lightCount > 0, "next-event estimation",
             in.enableLightSampling ? "no lights" : "enable_light_sampling is false");
     feature("environment", f.environment, "infinite_sphere emitter", "no environment emitter");
@@ -101,6 +112,9 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
             "more than 2048 BVH nodes or 1024 primitives: read from storage buffers");
 
     plan.featuresOf = "path_trace";
+    // Scenes with glossy materials get the path tracer that has their code (path_trace_glossy.comp);
+    // the others keep the smaller pipeline.
+    plan.pathTraceShader = f.bsdfFamilies != 0u ? "path_trace_glossy" : "path_trace";
     plan.pathTraceSpec = {
         {kSpecMaxBounces, pathDepthK(in)},
         {kSpecMinBounces, in.minBounces},
@@ -123,6 +137,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},
         {kSpecTestPmfWeight, gpu::specFloat(in.debias.testPmfWeight)},
         {kSpecSceneInUniforms, f.fitsUniforms},
+        {kSpecBsdfFamilies, f.bsdfFamilies},
         {kSpecHasMedia, f.media},
         {kSpecTrEstimator, uint32_t(in.transmittance.type)},
         {kSpecTrLevel, in.transmittance.level},
@@ -142,7 +157,7 @@ class PathTracePasses : public SamplePasses {
 public:
     PathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan, const RenderBuffers& b,
                     uint32_t seed)
-        : pipeline_(context, "path_trace", shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
+        : pipeline_(context, plan.pathTraceShader, shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
                     deviceSpec(context, plan.pathTraceSpec),
                     (1u << shader::kBindingBvhUniform) | (1u << shader::kBindingPrimsUniform)) {
         pipeline_.bindBuffers(

@@ -130,7 +130,8 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
     };
     feature("spheres", f.spheres, "sphere primitives present", "no sphere primitives");
     feature("disks", f.disks, "disk primitives present", "no disk primitives");
-    feature("specular", f.specular, "mirror or dielectric materials present", "no mirror or dielectric materials");
+    feature("specular", f.specular, "mirror, dielectric or conductor materials present",
+            "no mirror, dielectric or conductor materials");
     feature("next event", nee, "direct_lighting = next_event", "direct_lighting = photons: all light from photons");
     feature("debias", unbiased(in), "debias block: blocks of passes, K_r_b + correction", "no debias block: biased K_r");
     plan.featuresOf = "photon_trace and gather";

@@ -41,6 +41,7 @@ struct RenderPlan {
     std::vector<SkippedPass> skipped;
     std::vector<FeatureSwitch> features;
     std::vector<gpu::SpecConstant> pathTraceSpec;  // path_trace
+    std::string pathTraceShader = "path_trace";    // or "path_trace_glossy" (glossy materials present)
     std::vector<gpu::SpecConstant> photonSpec;     // photon_trace and gather
     std::string featuresOf = "path_trace";         // the pipeline(s) the feature switches describe
     std::string estimator;               // one line describing the estimator

@@ -1,5 +1,6 @@
 // "bsdfs" and every "bsdf" reference: Tungsten's BSDF types Telescope implements. A new
 // material family is read here (and added to BsdfType, scene.h).
+#include "scene/complex_ior.h"
 #include "scene/scene_reader.h"
 
 namespace telescope::scene_reader {
@@ -8,8 +9,7 @@ namespace {
 
 // Tungsten types that exist but Telescope does not implement (yet)
 constexpr std::string_view kUnsupportedBsdfs[] = {
-    "phong", "mixed", "conductor", "rough_conductor", "rough_dielectric", "smooth_coat",
-    "thinsheet", "oren_nayar", "plastic", "rough_plastic", "rough_coat", "transparency",
+    "phong", "mixed", "smooth_coat", "thinsheet", "rough_coat", "transparency",
     "lambertian_fiber", "rough_wire", "hair", "diffuse_transmission"};
 
 }  // namespace
@@ -34,9 +34,16 @@ Material SceneReader::readBsdf(const json& v, const std::string& key) {
     else if (type == "dielectric") m.type = BsdfType::Dielectric;
     else if (type == "null") m.type = BsdfType::Null;
     else if (type == "forward") m.type = BsdfType::Forward;
+    else if (type == "conductor") m.type = BsdfType::Conductor;
+    else if (type == "rough_conductor") m.type = BsdfType::RoughConductor;
+    else if (type == "plastic") m.type = BsdfType::Plastic;
+    else if (type == "rough_plastic") m.type = BsdfType::RoughPlastic;
+    else if (type == "oren_nayar") m.type = BsdfType::OrenNayar;
+    else if (type == "rough_dielectric") m.type = BsdfType::RoughDielectric;
     else if (isOneOf(kUnsupportedBsdfs, type)) fail(member(key, "type"), fmt::format("unsupported bsdf type '{}'", type));
     else fail(member(key, "type"), fmt::format("unknown bsdf type '{}'", type));
 
+    m.key = key;
     rejectMedia(v, key, {"int_medium", "ext_medium"});
     if (const json* name = find(v, "name")) m.name = string(*name, member(key, "name"));
     if (const json* albedo = find(v, "albedo")) m.albedo = colour(*albedo, member(key, "albedo"));
@@ -48,10 +55,91 @@ Material SceneReader::readBsdf(const json& v, const std::string& key) {
         if (const json* refraction = find(v, "enable_refraction"))
             m.enableRefraction = boolean(*refraction, member(key, "enable_refraction"));
         ignoreUnread(v, key, {"name", "type", "albedo", "ior", "enable_refraction"});
+    } else if (m.type == BsdfType::Conductor || m.type == BsdfType::RoughConductor) {
+        readConductor(v, key, m);
+    } else if (m.type == BsdfType::Plastic || m.type == BsdfType::RoughPlastic) {
+        // Tungsten's defaults: ior 1.5, thickness 1, sigma_a 0; rough: GGX, roughness 0.02.
+        m.roughness = 0.02f;
+        readIor(v, key, m);
+        if (const json* t = find(v, "thickness")) {
+            m.thickness = number(*t, member(key, "thickness"));
+            if (!(m.thickness >= 0.0f)) fail(member(key, "thickness"), "the thickness must not be negative");
+        }
+        if (const json* a = find(v, "sigma_a")) m.sigmaA = colour(*a, member(key, "sigma_a"));
+        std::vector<std::string_view> read = {"name", "type", "albedo", "ior", "thickness", "sigma_a"};
+        if (m.type == BsdfType::RoughPlastic) readMicrofacet(v, key, m, read);
+        ignoreUnread(v, key, read);
+    } else if (m.type == BsdfType::OrenNayar) {
+        m.roughness = 1.0f;  // Tungsten's default
+        if (const json* r = find(v, "roughness")) m.roughness = roughness(*r, member(key, "roughness"));
+        ignoreUnread(v, key, {"name", "type", "albedo", "roughness"});
+    } else if (m.type == BsdfType::RoughDielectric) {
+        readIor(v, key, m);
+        if (const json* refraction = find(v, "enable_refraction"))
+            m.enableRefraction = boolean(*refraction, member(key, "enable_refraction"));
+        std::vector<std::string_view> read = {"name", "type", "albedo", "ior", "enable_refraction"};
+        readMicrofacet(v, key, m, read);
+        ignoreUnread(v, key, read);
     } else {
         ignoreUnread(v, key, {"name", "type", "albedo"});
     }
     return m;
+}
+
+// "material" (a name from Tungsten's table) or "eta" and "k"; rough_conductor also "distribution"
+// and "roughness".
+void SceneReader::readConductor(const json& v, const std::string& key, Material& m) {
+    const json* material = find(v, "material");
+    const json* eta = find(v, "eta");
+    const json* k = find(v, "k");
+    if (material && (eta || k))
+        fail(member(key, eta ? "eta" : "k"), "give either a named \"material\" or \"eta\" and \"k\", not both");
+    if (bool(eta) != bool(k))
+        fail(member(key, eta ? "k" : "eta"), "\"eta\" and \"k\" go together (the complex index eta + i k)");
+    if (material) {
+        const std::string name = string(*material, member(key, "material"));
+        const ComplexIor* c = findComplexIor(name);
+        if (!c) {
+            std::string names;
+            for (std::string_view n : complexIorNames()) names += (names.empty() ? "" : ", ") + std::string(n);
+            fail(member(key, "material"), fmt::format("unknown conductor '{}' (known: {})", name, names));
+        }
+        m.eta = c->eta;
+        m.k = c->k;
+    } else if (eta) {
+        m.eta = vec3(*eta, member(key, "eta"));
+        m.k = vec3(*k, member(key, "k"));
+    }
+    std::vector<std::string_view> read = {"name", "type", "albedo", "material", "eta", "k"};
+    if (m.type == BsdfType::RoughConductor) readMicrofacet(v, key, m, read);
+    ignoreUnread(v, key, read);
+}
+
+// "distribution" and "roughness" of a microfacet material.
+void SceneReader::readMicrofacet(const json& v, const std::string& key, Material& m, std::vector<std::string_view>& read) {
+    if (const json* d = find(v, "distribution")) {
+        const std::string name = string(*d, member(key, "distribution"));
+        if (name == "ggx") m.distribution = shader::kMicrofacetGGX;
+        else if (name == "beckmann") m.distribution = shader::kMicrofacetBeckmann;
+        else if (name == "phong") m.distribution = shader::kMicrofacetPhong;
+        else fail(member(key, "distribution"), fmt::format("unknown distribution '{}' (ggx, beckmann, phong)", name));
+    }
+    if (const json* r = find(v, "roughness")) m.roughness = roughness(*r, member(key, "roughness"));
+    read.insert(read.end(), {"distribution", "roughness"});
+}
+
+float SceneReader::roughness(const json& v, const std::string& key) const {
+    if (!v.is_number()) fail(key, "expected a number (textured roughness is not supported), got " + quote(v));
+    const float r = number(v, key);
+    if (!(r >= 0.0f)) fail(key, "the roughness must not be negative");
+    return r;
+}
+
+void SceneReader::readIor(const json& v, const std::string& key, Material& m) {
+    if (const json* ior = find(v, "ior")) {
+        m.ior = number(*ior, member(key, "ior"));
+        if (m.ior <= 0.0f) fail(member(key, "ior"), "the index of refraction must be positive");
+    }
 }
 
 // The material for a "bsdf" value: a name from the bsdfs list (added to the scene on first use)

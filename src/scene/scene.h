@@ -19,16 +19,34 @@ namespace telescope {
 
 enum class BsdfType : uint32_t {
     Lambert = shader::kBsdfLambert, Mirror = shader::kBsdfMirror, Dielectric = shader::kBsdfDielectric,
-    Null = shader::kBsdfNull, Forward = shader::kBsdfForward
+    Null = shader::kBsdfNull, Forward = shader::kBsdfForward, Conductor = shader::kBsdfConductor,
+    RoughConductor = shader::kBsdfRoughConductor, Plastic = shader::kBsdfPlastic, RoughPlastic = shader::kBsdfRoughPlastic,
+    OrenNayar = shader::kBsdfOrenNayar, RoughDielectric = shader::kBsdfRoughDielectric
 };
 
 struct Material {
     std::string name;
+    std::string key;               // where it was defined ("bsdfs[2]"), for messages
     BsdfType type = BsdfType::Lambert;
     glm::vec3 albedo{1.0f};
-    float ior = 1.5f;              // dielectric only
-    bool enableRefraction = true;  // dielectric only
+    float ior = 1.5f;              // dielectrics and plastics
+    bool enableRefraction = true;  // dielectrics only
+    // Microfacet materials: roughness and distribution (shader::kMicrofacet*); conductors: the
+    // complex index eta + i k (Tungsten's defaults: copper, GGX, roughness 0.1).
+    float roughness = 0.1f;
+    uint32_t distribution = shader::kMicrofacetGGX;
+    glm::vec3 eta{0.2004376970f, 0.9240334304f, 1.1022119527f};
+    glm::vec3 k{3.9129485033f, 2.4528477015f, 2.1421879552f};
+    // Plastics: the coat's thickness and absorption (Tungsten's defaults 1 and 0).
+    float thickness = 1.0f;
+    glm::vec3 sigmaA{0.0f};
 };
+
+// Whether the photon tracer and gather implement a material (the others are path tracing's).
+inline bool photonsSupport(BsdfType t) {
+    return t == BsdfType::Lambert || t == BsdfType::Mirror || t == BsdfType::Dielectric || t == BsdfType::Null ||
+           t == BsdfType::Forward || t == BsdfType::Conductor;
+}
 
 enum class GeometryType : uint32_t {
     Triangle = shader::kPrimTriangle, Sphere = shader::kPrimSphere, Disk = shader::kPrimDisk, Quad = shader::kPrimQuad

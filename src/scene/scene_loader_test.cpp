@@ -346,6 +346,64 @@ TEST(SceneLoader, BsdfSharingAndDefaults) {
     EXPECT_TRUE(hasIgnored(s, "primitives[2].bsdf.bump"));
 }
 
+TEST(SceneLoader, Conductors) {
+    const Scene s = load(R"({"bsdfs": [{"name": "cu", "type": "rough_conductor"},
+                                        {"name": "gold", "type": "conductor", "material": "Au", "albedo": 0.5},
+                                        {"name": "custom", "type": "rough_conductor", "eta": [1, 2, 3], "k": 4,
+                                         "distribution": "beckmann", "roughness": 0.25}],
+        "primitives": [{"type": "quad", "bsdf": "cu"}, {"type": "quad", "bsdf": "gold"}, {"type": "quad", "bsdf": "custom"}]})");
+    // Tungsten's defaults: copper, GGX, roughness 0.1.
+    const Material& cu = s.materials[s.geometry[0].material];
+    EXPECT_EQ(cu.type, BsdfType::RoughConductor);
+    EXPECT_EQ(cu.distribution, shader::kMicrofacetGGX);
+    EXPECT_FLOAT_EQ(cu.roughness, 0.1f);
+    expectVec(cu.eta, {0.2004376970f, 0.9240334304f, 1.1022119527f});
+    expectVec(cu.k, {3.9129485033f, 2.4528477015f, 2.1421879552f});
+    const Material& gold = s.materials[s.geometry[1].material];
+    EXPECT_EQ(gold.type, BsdfType::Conductor);
+    expectVec(gold.eta, {0.1431189557f, 0.3749570432f, 1.4424785571f});
+    expectVec(gold.k, {3.9831604247f, 2.3857207478f, 1.6032152899f});
+    expectVec(gold.albedo, glm::vec3(0.5f));
+    const Material& custom = s.materials[s.geometry[2].material];
+    EXPECT_EQ(custom.distribution, shader::kMicrofacetBeckmann);
+    EXPECT_FLOAT_EQ(custom.roughness, 0.25f);
+    expectVec(custom.eta, {1, 2, 3});
+    expectVec(custom.k, glm::vec3(4.0f));
+}
+
+TEST(SceneLoader, PlasticsOrenNayarRoughDielectric) {
+    const Scene s = load(R"({"bsdfs": [{"name": "p", "type": "plastic"},
+                                        {"name": "rp", "type": "rough_plastic", "ior": 1.3, "thickness": 2, "sigma_a": [0.1, 0.2, 0.3],
+                                         "distribution": "beckmann", "roughness": 0.3},
+                                        {"name": "on", "type": "oren_nayar"},
+                                        {"name": "rd", "type": "rough_dielectric", "enable_refraction": false, "albedo": 0.5}],
+        "primitives": [{"type": "quad", "bsdf": "p"}, {"type": "quad", "bsdf": "rp"}, {"type": "quad", "bsdf": "on"},
+                       {"type": "quad", "bsdf": "rd"}]})");
+    // Tungsten's defaults: ior 1.5, thickness 1, no absorption; rough plastic GGX 0.02; Oren-Nayar 1;
+    // rough dielectric GGX 0.1.
+    const Material& p = s.materials[s.geometry[0].material];
+    EXPECT_EQ(p.type, BsdfType::Plastic);
+    EXPECT_FLOAT_EQ(p.ior, 1.5f);
+    EXPECT_FLOAT_EQ(p.thickness, 1.0f);
+    expectVec(p.sigmaA, glm::vec3(0.0f));
+    const Material& rp = s.materials[s.geometry[1].material];
+    EXPECT_EQ(rp.type, BsdfType::RoughPlastic);
+    EXPECT_FLOAT_EQ(rp.ior, 1.3f);
+    EXPECT_FLOAT_EQ(rp.thickness, 2.0f);
+    expectVec(rp.sigmaA, {0.1f, 0.2f, 0.3f});
+    EXPECT_EQ(rp.distribution, shader::kMicrofacetBeckmann);
+    EXPECT_FLOAT_EQ(rp.roughness, 0.3f);
+    const Material& on = s.materials[s.geometry[2].material];
+    EXPECT_EQ(on.type, BsdfType::OrenNayar);
+    EXPECT_FLOAT_EQ(on.roughness, 1.0f);
+    const Material& rd = s.materials[s.geometry[3].material];
+    EXPECT_EQ(rd.type, BsdfType::RoughDielectric);
+    EXPECT_FLOAT_EQ(rd.roughness, 0.1f);
+    EXPECT_EQ(rd.distribution, shader::kMicrofacetGGX);
+    EXPECT_FALSE(rd.enableRefraction);
+    expectVec(rd.albedo, glm::vec3(0.5f));
+}
+
 TEST(SceneLoader, UnknownKeysAreIgnoredNotErrors) {
     const Scene s = load(R"({"primitives": [], "version": 2, "camera": {"vignette": 1}})");
     EXPECT_TRUE(hasIgnored(s, "version"));
@@ -535,7 +593,18 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"TopLevelNotObject", "[1, 2]", "", "", "top level"},
         BadInput{"UnknownPrimitiveType", withPrimitive(R"({"type": "teapot"})"), "", "primitives[0].type", "unknown primitive type 'teapot'"},
         BadInput{"UnsupportedPrimitiveType", withPrimitive(R"({"type": "curves"})"), "", "primitives[0].type", "unsupported primitive type 'curves'"},
-        BadInput{"UnsupportedBsdfType", R"({"bsdfs": [{"type": "plastic"}]})", "", "bsdfs[0].type", "unsupported bsdf type 'plastic'"},
+        BadInput{"UnsupportedBsdfType", R"({"bsdfs": [{"type": "smooth_coat"}]})", "", "bsdfs[0].type", "unsupported bsdf type 'smooth_coat'"},
+        BadInput{"UnknownConductor", R"({"bsdfs": [{"type": "conductor", "material": "Unobtainium"}]})", "", "bsdfs[0].material", "unknown conductor 'Unobtainium'"},
+        BadInput{"ConductorEtaWithoutK", R"({"bsdfs": [{"type": "rough_conductor", "eta": 1.2}]})", "", "bsdfs[0].k", "go together"},
+        BadInput{"ConductorMaterialAndEta", R"({"bsdfs": [{"type": "conductor", "material": "Au", "eta": 1, "k": 2}]})", "", "bsdfs[0].eta", "not both"},
+        BadInput{"UnknownDistribution", R"({"bsdfs": [{"type": "rough_conductor", "distribution": "blinn"}]})", "", "bsdfs[0].distribution", "unknown distribution 'blinn'"},
+        BadInput{"TexturedRoughness", R"({"bsdfs": [{"type": "rough_conductor", "roughness": "r.png"}]})", "", "bsdfs[0].roughness", "expected a number"},
+        BadInput{"NegativeRoughness", R"({"bsdfs": [{"type": "rough_conductor", "roughness": -0.1}]})", "", "bsdfs[0].roughness", "must not be negative"},
+        BadInput{"PlasticNegativeThickness", R"({"bsdfs": [{"type": "plastic", "thickness": -1}]})", "", "bsdfs[0].thickness", "must not be negative"},
+        BadInput{"RoughDielectricZeroIor", R"({"bsdfs": [{"type": "rough_dielectric", "ior": 0}]})", "", "bsdfs[0].ior", "must be positive"},
+        BadInput{"OrenNayarTexturedRoughness", R"({"bsdfs": [{"type": "oren_nayar", "roughness": {"type": "checker"}}]})", "", "bsdfs[0].roughness", "textured roughness"},
+        BadInput{"PlasticWithPhotons", R"({"primitives": [{"type": "quad", "bsdf": {"type": "plastic"}}], "integrator": {"type": "progressive_photon_map", "gather_radius": 0.1}})", "", "primitives[0].bsdf.type", "photon mapping does not implement"},
+        BadInput{"RoughConductorWithPhotons", R"({"bsdfs": [{"name": "cu", "type": "rough_conductor"}], "primitives": [{"type": "quad", "bsdf": "cu"}], "integrator": {"type": "photon_map", "gather_radius": 0.1}})", "", "bsdfs[0].type", "photon mapping does not implement"},
         BadInput{"UnknownBsdfType", R"({"bsdfs": [{"type": "velvet"}]})", "", "bsdfs[0].type", "unknown bsdf type 'velvet'"},
         BadInput{"UnknownBsdfName", withPrimitive(kQuad + "," + R"({"type": "quad", "bsdf": "black"})"), "", "primitives[1].bsdf", "unknown bsdf 'black'"},
         BadInput{"MissingBsdf", withPrimitive(R"({"type": "sphere"})"), "", "primitives[0]", "missing 'bsdf'"},

@@ -90,6 +90,10 @@ private:
     void readBsdfs(const json& list);
     Material readBsdf(const json& v, const std::string& key);
     uint32_t material(const json& ref, const std::string& key);
+    void readConductor(const json& v, const std::string& key, Material& m);
+    void readMicrofacet(const json& v, const std::string& key, Material& m, std::vector<std::string_view>& read);
+    void readIor(const json& v, const std::string& key, Material& m);
+    float roughness(const json& v, const std::string& key) const;
 
     // Shapes (shape_reader.cpp)
     void readPrimitive(const json& v, const std::string& key);

@@ -1,0 +1,57 @@
+// The material families on the command line: `plan` lists which glossy families are compiled into
+// the path tracer, and photon mapping refuses a bsdf it does not implement (exit 2, the file and
+// the bsdf's key named, no output written).
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <regex>
+
+#include "cli_process.h"
+
+using namespace telescope;
+using namespace telescope::test;
+
+namespace {
+
+class MaterialCli : public ScratchTest {
+protected:
+    MaterialCli() : ScratchTest("material-cli-" + std::to_string(::getpid())) {}
+};
+
+}  // namespace
+
+TEST_F(MaterialCli, PlanListsTheGlossyFamiliesOfTheScene) {
+    const std::string outFile = out("plan.txt");
+    const int status = std::system(
+        (std::string(TELESCOPE_BINARY) + " plan " + sourcePath("scenes/rough-plastic.json") + " > " + outFile).c_str());
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    const std::string text = readText(outFile);
+    EXPECT_TRUE(std::regex_search(text, std::regex("rough_plastic +on +rough_plastic materials present"))) << text;
+    for (const char* family : {"rough_conductor", "plastic", "oren_nayar", "rough_dielectric"})
+        EXPECT_TRUE(std::regex_search(text, std::regex(std::string("\n  ") + family + " +off +no " + family))) << family << "\n" << text;
+    // The Cornell box has none of them.
+    const int cornell = std::system(
+        (std::string(TELESCOPE_BINARY) + " plan " + sourcePath("scenes/cornell-box.json") + " > " + outFile).c_str());
+    ASSERT_TRUE(WIFEXITED(cornell) && WEXITSTATUS(cornell) == 0);
+    EXPECT_EQ(readText(outFile).find(" on   rough"), std::string::npos) << readText(outFile);
+}
+
+TEST_F(MaterialCli, PhotonMappingRejectsAGlossyBsdfByItsKey) {
+    const std::string exr = out("photons.exr");
+    const CommandResult r = run("render " + sourcePath("scenes/point-plane-photon.json") + " -o " + exr +
+                                " --set bsdfs[0].type=rough_conductor");
+    EXPECT_EQ(r.exitCode, 2) << r.stderrText;
+    EXPECT_NE(r.stderrText.find("point-plane-photon.json"), std::string::npos) << r.stderrText;
+    EXPECT_NE(r.stderrText.find("bsdfs[0].type"), std::string::npos) << r.stderrText;
+    EXPECT_NE(r.stderrText.find("photon mapping does not implement"), std::string::npos) << r.stderrText;
+    EXPECT_FALSE(std::filesystem::exists(exr));
+    // The smooth conductor is one photon mapping implements (the photon plane with a gold floor).
+    const CommandResult ok = run("render " + sourcePath("scenes/point-plane-photon.json") + " -o " + exr +
+                                 " --set bsdfs[0].type=conductor --set bsdfs[0].material=Au"
+                                 " --set camera.resolution=[8,8] --spp 1 -q --no-png");
+    EXPECT_EQ(ok.exitCode, 0) << ok.stderrText;
+    EXPECT_TRUE(std::filesystem::exists(exr));
+}

@@ -1,0 +1,217 @@
+// Glossy materials in the path tracer against known answers (docs/TESTING.md).
+//
+// scenes/rough-conductor.json: an infinite plate under a constant sky of radiance 1, seen through
+// pixel centres (dirac filter). A plate cannot see itself, so every pixel is exactly the plate's
+// directional albedo for the view direction, E(wi) = integral of eval(wi, wo) dwo over the upper
+// hemisphere, which the test integrates by quadrature from the shared BSDF code (the renderer
+// estimates it with next-event estimation, BSDF sampling and MIS). Z-tests per 8x8 block and of the
+// image mean, one Sidak family at 1e-3; the control renders a wrong roughness against the same
+// answer and must be rejected. The estimator is bounded (weights below 1 per lobe), so its
+// variance is finite.
+//
+// The smooth conductor (the same scene with type "conductor") is deterministic per pixel:
+// albedo F(cos theta), compared exactly.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+
+#include "region_stats.h"
+#include "render/gpu_scene.h"
+#include "render_harness.h"
+#include "shared/bsdf.h"
+#include "shared/camera.h"
+
+using namespace telescope;
+using namespace telescope::test;
+
+namespace {
+
+class GlossyRender : public ::testing::Test {
+protected:
+    void TearDown() override { expectNoValidationMessages(); }
+};
+
+// Unit view direction (towards the camera) of every pixel centre, in the plate's frame (normal +y
+// becomes local z).
+std::vector<glm::vec3> pixelViewDirections(const Scene& s) {
+    const Camera& c = s.camera;
+    const float d = shader::cameraPlaneDistance(c.fovDegrees);
+    std::vector<glm::vec3> out;
+    for (uint32_t y = 0; y < c.height; ++y)
+        for (uint32_t x = 0; x < c.width; ++x) {
+            const glm::vec3 dir = shader::cameraRayDirection(glm::vec2(x + 0.5f, y + 0.5f), c.width, c.height, d, c.right,
+                                                              c.up, c.forward);
+            const glm::vec3 wi = -glm::normalize(dir);
+            out.push_back(glm::vec3(wi.x, -wi.z, wi.y));  // (t, b, n) with n = +y; isotropic, any t works
+        }
+    return out;
+}
+
+// A function of the view angle theta, tabulated and interpolated linearly.
+struct AlbedoTable {
+    std::vector<double> theta, value;
+    double operator()(double t) const {
+        const double step = theta[1] - theta[0];
+        const double f = std::clamp((t - theta[0]) / step, 0.0, double(theta.size() - 1) - 1e-9);
+        const size_t i = size_t(f);
+        return value[i] + (value[i + 1] - value[i]) * (f - double(i));
+    }
+};
+
+// Directional albedo of material m (the Dirac lobe of a plastic plus the quadrature of eval over
+// the sphere: light from below reaches a refracting plate too), tabulated over the view angle (it
+// depends on theta only) and interpolated linearly.
+std::array<AlbedoTable, 3> albedoTables(const shader::MaterialGpu& m, double maxTheta) {
+    std::array<AlbedoTable, 3> t;
+    const int nodes = 64;
+    for (int i = 0; i < nodes; ++i) {
+        const double th = maxTheta * i / (nodes - 1);
+        const glm::vec3 wi(float(std::sin(th)), 0.0f, float(std::cos(th)));
+        const double dirac = m.type == shader::kBsdfPlastic ? shader::fresnelDielectricSigned(wi.z, m.ior) : 0.0;
+        for (int c = 0; c < 3; ++c) {
+            t[c].theta.push_back(th);
+            t[c].value.push_back(0.0);
+        }
+        // Midpoint rule in (theta, phi), dw = sin theta dtheta dphi, all three channels at once.
+        const double pi = 3.14159265358979323846;
+        const int nt = 1024, np = 128;
+        glm::dvec3 acc(0.0);
+        for (int a = 0; a < nt; ++a) {
+            const double tt = pi * (a + 0.5) / nt;
+            glm::dvec3 ring(0.0);
+            for (int b = 0; b < np; ++b) {
+                const double ph = 2.0 * pi * (b + 0.5) / np;
+                const glm::vec3 wo(float(std::sin(tt) * std::cos(ph)), float(std::sin(tt) * std::sin(ph)), float(std::cos(tt)));
+                ring += glm::dvec3(shader::glossyEval(m, wi, wo));
+            }
+            acc += ring * std::sin(tt);
+        }
+        acc *= (pi / nt) * (2.0 * pi / np);
+        for (int c = 0; c < 3; ++c) t[c].value.back() = dirac + acc[c];
+    }
+    return t;
+}
+
+// The material as the renderer uploads it.
+shader::MaterialGpu gpuMaterial(const Scene& s) { return telescope::gpuMaterial(s.materials.at(0)); }
+
+// Block means (8x8) and the image mean of the closed form, per pixel from the albedo tables.
+std::pair<std::vector<RegionMean>, RegionMean> expectedRegions(const Scene& s) {
+    const shader::MaterialGpu g = gpuMaterial(s);
+    const std::vector<glm::vec3> wi = pixelViewDirections(s);
+    double maxTheta = 0.0;
+    for (const glm::vec3& w : wi) maxTheta = std::max(maxTheta, std::acos(double(std::clamp(w.z, -1.0f, 1.0f))));
+    const std::array<AlbedoTable, 3> tables = albedoTables(g, maxTheta + 0.01);
+    const uint32_t w = s.camera.width, h = s.camera.height, b = 8;
+    std::vector<RegionMean> blocks((w / b) * (h / b));
+    RegionMean image;
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x) {
+            const double th = std::acos(double(std::clamp(wi[y * w + x].z, -1.0f, 1.0f)));
+            const glm::dvec3 v(tables[0](th), tables[1](th), tables[2](th));
+            blocks[(y / b) * (w / b) + x / b].mean += v / double(b * b);
+            image.mean += v / double(w * h);
+        }
+    return {blocks, image};
+}
+
+}  // namespace
+
+namespace {
+
+// The plate of `scene` (with overrides) against its directional albedo, and a control with one
+// parameter wrong rendered against the same answer, which must be rejected.
+void checkPlate(const std::string& scene, const std::vector<SceneOverride>& overrides,
+                const std::vector<SceneOverride>& wrongOverrides, uint32_t seed) {
+    const Scene s = loadTestScene(scene, overrides);
+    const auto [blocks, image] = expectedRegions(s);
+    const Film film = renderFilm(s, 256, seed);
+    EXPECT_EQ(film.nonFiniteSamples(), 0u);
+    const ZSummary z = compareBlocksAndImage(film, blocks, image, 8);
+    EXPECT_EQ(z.failing, 0u) << scene << ": " << z.worst << " (threshold " << z.threshold << ")";
+    const RegionMean got = imageMean(film);
+    std::printf("%s: image mean %.5f %.5f %.5f, expected %.5f %.5f %.5f, max |Z| %.2f\n", scene.c_str(), got.mean.x,
+                got.mean.y, got.mean.z, image.mean.x, image.mean.y, image.mean.z, z.maxAbsZ);
+
+    std::vector<SceneOverride> wrong = overrides;
+    wrong.insert(wrong.end(), wrongOverrides.begin(), wrongOverrides.end());
+    const ZSummary c = compareBlocksAndImage(renderFilm(loadTestScene(scene, wrong), 256, seed + 1), blocks, image, 8);
+    std::printf("control %s %s=%s: %zu of %zu tests fail, worst %s\n", scene.c_str(), wrongOverrides[0].key.c_str(),
+                wrongOverrides[0].value.c_str(), c.failing, c.tests, c.worst.c_str());
+    EXPECT_GT(c.failing, 0u) << scene << ": the test cannot see " << wrongOverrides[0].key << " = " << wrongOverrides[0].value;
+}
+
+}  // namespace
+
+TEST_F(GlossyRender, RoughConductorPlateMatchesItsDirectionalAlbedo) {
+    checkPlate("scenes/rough-conductor.json", {}, {{"bsdfs[0].roughness", "0.2"}}, 5);
+    checkPlate("scenes/rough-conductor.json", {{"bsdfs[0].distribution", "beckmann"}}, {{"bsdfs[0].roughness", "0.2"}}, 7);
+}
+
+TEST_F(GlossyRender, PlasticPlateMatchesItsDirectionalAlbedo) {
+    checkPlate("scenes/plastic.json", {}, {{"bsdfs[0].ior", "1.7"}}, 11);
+}
+
+TEST_F(GlossyRender, RoughPlasticPlateMatchesItsDirectionalAlbedo) {
+    checkPlate("scenes/rough-plastic.json", {}, {{"bsdfs[0].roughness", "0.4"}}, 13);
+}
+
+TEST_F(GlossyRender, OrenNayarPlateMatchesItsDirectionalAlbedo) {
+    checkPlate("scenes/oren-nayar.json", {}, {{"bsdfs[0].roughness", "0.4"}}, 17);
+}
+
+// Light reaches the frosted plate from both sides (the sky is below it too).
+TEST_F(GlossyRender, RoughDielectricPlateMatchesItsDirectionalAlbedo) {
+    checkPlate("scenes/rough-dielectric.json", {}, {{"bsdfs[0].roughness", "0.8"}}, 19);
+}
+
+TEST_F(GlossyRender, SmoothConductorPlateIsItsFresnelTerm) {
+    const Scene s = loadTestScene("scenes/rough-conductor.json",
+                                  {{"bsdfs[0].type", "conductor"}, {"bsdfs[0].material", "Au"},
+                                   {"bsdfs[0].albedo", "0.5"}});
+    ASSERT_EQ(s.materials.at(0).type, BsdfType::Conductor);
+    const Film film = renderFilm(s, 4, 3);
+    const std::vector<glm::vec3> wi = pixelViewDirections(s);
+    // Gold at normal incidence, from its tabulated index: ((n-1)^2 + k^2) / ((n+1)^2 + k^2) per channel.
+    const glm::vec3 eta = s.materials[0].eta, k = s.materials[0].k;
+    EXPECT_NEAR(eta.x, 0.1431189557f, 1e-6f);
+    EXPECT_NEAR(k.z, 1.6032152899f, 1e-6f);
+    size_t checked = 0;
+    for (uint32_t i = 0; i < wi.size(); ++i) {
+        const glm::dvec3 v = film.mean(0, i);
+        const glm::vec3 f = 0.5f * shader::fresnelConductor(eta, k, wi[i].z);
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(v[c], f[c], 1e-4 * f[c]) << "pixel " << i << " channel " << c;
+        ++checked;
+    }
+    EXPECT_EQ(checked, 32u * 32u);
+}
+
+// The glossy path tracer with media: a rough dielectric of index 1.0001 and roughness 0.001 around
+// the absorbing slabs (its crossings are bounces, as the forward boundary's are, and it refracts
+// all but ~1e-9 of the light straight on) renders the forward-boundary image: independent renders,
+// 8x8 blocks and the image mean, one Sidak family. Control: a glass boundary (ior 1.5, roughness
+// 0.3) against the same image.
+TEST_F(GlossyRender, IndexMatchedRoughDielectricAroundMediaIsTheForwardBoundary) {
+    const std::vector<SceneOverride> small = {{"camera.resolution", "[32,32]"}};
+    const Film forward = renderFilm(loadTestScene("scenes/absorbing-slab.json", small), 256, 31);
+    auto withBoundary = [&](const char* bsdf) {
+        std::vector<SceneOverride> o = small;
+        o.push_back({"bsdfs[0]", bsdf});
+        return loadTestScene("scenes/absorbing-slab.json", o);
+    };
+    const Scene matched = withBoundary(R"({"name":"boundary","type":"rough_dielectric","ior":1.0001,"roughness":0.001})");
+    ASSERT_EQ(matched.materials.at(0).type, BsdfType::RoughDielectric);
+    const Film glossy = renderFilm(matched, 256, 32);
+    EXPECT_EQ(glossy.nonFiniteSamples(), 0u);
+    const ZSummary z = compareBlocksAndImage(glossy, blockMeans(forward, 8), imageMean(forward), 8);
+    EXPECT_EQ(z.failing, 0u) << z.worst << " (threshold " << z.threshold << ")";
+    std::printf("matched rough dielectric: image mean %.5f, forward %.5f, max |Z| %.2f\n", imageMean(glossy).mean.x,
+                imageMean(forward).mean.x, z.maxAbsZ);
+
+    const Film glass =
+        renderFilm(withBoundary(R"({"name":"boundary","type":"rough_dielectric","ior":1.5,"roughness":0.3})"), 256, 33);
+    const ZSummary c = compareBlocksAndImage(glass, blockMeans(forward, 8), imageMean(forward), 8);
+    std::printf("control glass boundary: %zu of %zu tests fail, worst %s\n", c.failing, c.tests, c.worst.c_str());
+    EXPECT_GT(c.failing, 0u);
+}
