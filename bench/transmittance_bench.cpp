@@ -44,6 +44,16 @@ double slabClosedForm(const Camera& cam, uint32_t x, uint32_t y) {
 // Work x MSE of a render: render seconds (pipeline compiled before timing) times the mean over
 // pixels of the squared error against the closed form (slab) or of the variance of the mean
 // (smoke box: unbiased estimators only, whose MSE is their variance).
+// One render of the scene at spp (seed 7): the film and the render's wall seconds.
+Film timedRender(const Scene& scene, uint64_t spp, double& seconds) {
+    Renderer renderer(context(), scene, 7);
+    RenderRequest request;
+    request.spp = spp;
+    renderer.render(request);
+    seconds = renderer.stats().wallSeconds;
+    return renderer.film();
+}
+
 void renderEfficiency(benchmark::State& state, const std::string& sceneName, const std::string& estimator) {
     const bool slab = sceneName == "absorbing-slab";
     std::vector<SceneOverride> overrides = {{"camera.resolution", slab ? "[64,64]" : "[48,36]"},
@@ -52,12 +62,7 @@ void renderEfficiency(benchmark::State& state, const std::string& sceneName, con
     const uint64_t spp = slab ? 64 : 16;
     double seconds = 0.0, workMse = 0.0, mse = 0.0;
     for (auto _ : state) {
-        Renderer renderer(context(), scene, 7);
-        RenderRequest request;
-        request.spp = spp;
-        renderer.render(request);
-        seconds = renderer.stats().wallSeconds;
-        Film film = renderer.film();
+        Film film = timedRender(scene, spp, seconds);
         double sum = 0.0;
         for (uint32_t y = 0; y < film.height(); ++y)
             for (uint32_t x = 0; x < film.width(); ++x) {
@@ -144,12 +149,7 @@ void majorantEfficiency(benchmark::State& state, const std::string& estimator, u
     const uint64_t spp = 64;
     double seconds = 0.0, mse = 0.0;
     for (auto _ : state) {
-        Renderer renderer(context(), scene, 7);
-        RenderRequest request;
-        request.spp = spp;
-        renderer.render(request);
-        seconds = renderer.stats().wallSeconds;
-        Film film = renderer.film();
+        Film film = timedRender(scene, spp, seconds);
         double sum = 0.0;
         for (size_t i = 0; i < film.pixelCount(); ++i) {
             const glm::dvec3 v = film.varianceOfMean(i);

@@ -183,14 +183,7 @@ vec3 trTrackGrid(uint mode, TrSegment s, inout Rng rng, inout uint lookups) {
             t = tc;
             vec3 sigma = s.sigmaT * (trDensity(s, t) - control);
             lookups += 1u;
-            if (mode == kTrEstDeltaTracking) {
-                float xi = rngNext(rng);
-                result *= vec3(xi >= sigma.x / mu ? 1.0 : 0.0, xi >= sigma.y / mu ? 1.0 : 0.0,
-                               xi >= sigma.z / mu ? 1.0 : 0.0);
-                if (trMaxComponent(result) == 0.0) break;
-            } else {
-                result *= vec3(1.0) - sigma / mu;
-            }
+            if (!trCollide(mode, sigma, mu, result, rng)) break;
             continue;
         }
         // Into the next cell (the exponential steps are memoryless, so the piece restarts there)

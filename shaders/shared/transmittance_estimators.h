@@ -130,6 +130,22 @@ FN vec3 trDebiasedRayMarch(TrEstimator e, TrModel m, uint form, TrSegment s, INO
 }
 
 // ---- Tracking walker: tentative collisions with rate mu (majorant of sigma_t) ----
+
+// The weight of one tentative collision where the (control-subtracted) extinction is sigma:
+// delta tracking keeps each channel with probability 1 - sigma/mu, the ratio trackers multiply by
+// it. Returns false when delta tracking has ended every channel (the walk can stop). One source
+// for the walker below and the majorant-grid walker of medium.glsl.
+FN bool trCollide(uint mode, vec3 sigma, float mu, INOUT(vec3) result, INOUT(Rng) rng) {
+    if (mode == kTrEstDeltaTracking) {
+        float xi = rngNext(rng);
+        result *= vec3(xi >= sigma.x / mu ? 1.0f : 0.0f, xi >= sigma.y / mu ? 1.0f : 0.0f,
+                       xi >= sigma.z / mu ? 1.0f : 0.0f);
+        return trMaxComponent(result) != 0.0f;
+    }
+    result *= vec3(1.0f) - sigma / mu;
+    return true;
+}
+
 // mode: delta (1 until a real collision per channel), ratio (prod 1 - sigma/mu), residual ratio
 // (exp(-sigma_c l) prod 1 - (sigma - sigma_c)/mu_r with sigma_c at the middle of the density
 // bounds and mu_r their half-width).
@@ -150,14 +166,7 @@ FN vec3 trTrack(uint mode, TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
         if (t >= s.len) break;
         vec3 sigma = s.sigmaT * (trDensity(s, t) - control);
         lookups += 1u;
-        if (mode == kTrEstDeltaTracking) {
-            float xi = rngNext(rng);
-            result *= vec3(xi >= sigma.x / mu ? 1.0f : 0.0f, xi >= sigma.y / mu ? 1.0f : 0.0f,
-                           xi >= sigma.z / mu ? 1.0f : 0.0f);
-            if (trMaxComponent(result) == 0.0f) break;
-        } else {
-            result *= vec3(1.0f) - sigma / mu;
-        }
+        if (!trCollide(mode, sigma, mu, result, rng)) break;
     }
     return result;
 }
