@@ -7,13 +7,15 @@
 // block means of R + G + B, e_b = (render_b - reference_b) / reference_b over the lit blocks
 // (reference above 1/4 of the mean block; the blocks that hold a directly seen light are left
 // out, see lightBlocks): bounds on the median of e_b (a bias of the whole image) and on the 75th
-// percentile of |e_b|; for non-exponential also on the largest |render_b - reference_b| /
+// percentile of |e_b|; also on the largest |render_b - reference_b| /
 // max(reference_b, floor) over all blocks and on the error of the image mean. The bounds are calibrated on two
 // renders of the same setting with different seeds (their numbers are next to each bound): the
 // reference's own noise is far below the render's (about 250x the samples per block), so a
 // correct render's error is its own noise plus the small difference the filter's footprint makes
 // at a quarter of the resolution. Positive controls: the old bounce counting (a path with
 // max_bounces scattering vertices kept: max_bounces + 1 here) fails the same bounds.
+// volumetric-caustic also leaves out of both images the isolated events (single samples that hit
+// its tiny light through the glass ball; see its test) and bounds all four statistics.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -94,14 +96,68 @@ struct Agreement {
     double imageError = 0.0;  // (mean render - mean reference) / mean reference
     std::string worst;
     std::string skipped;  // the light blocks left out
+    size_t events = 0;    // isolated event pixels left out (dropEvents)
 };
 
+// Rare events: pixels whose R + G + B is above kEventNeighbourFactor times each of their (up to 8)
+// neighbours' and above kEventMeanFactor times the image mean; tests/data/make_block_means.py
+// --drop-events applies the same rule to the reference. In volumetric-caustic such a pixel is one
+// camera sample that found the 0.005 x 0.004 light through the glass ball (value ~1.05e6 / spp):
+// see the bounds below.
+constexpr double kEventNeighbourFactor = 10.0;
+constexpr double kEventMeanFactor = 10.0;
+
+std::vector<bool> isolatedEvents(const std::vector<double>& v, uint32_t w, uint32_t h) {
+    double mean = 0.0;
+    for (double x : v) mean += x / double(v.size());
+    std::vector<bool> out(v.size(), false);
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x) {
+            const double c = v[size_t(y) * w + x];
+            if (!(c > kEventMeanFactor * mean)) continue;
+            double nb = 0.0;
+            for (uint32_t j = y > 0 ? y - 1 : 0; j <= std::min(y + 1, h - 1); ++j)
+                for (uint32_t i = x > 0 ? x - 1 : 0; i <= std::min(x + 1, w - 1); ++i)
+                    if (i != x || j != y) nb = std::max(nb, v[size_t(j) * w + i]);
+            out[size_t(y) * w + x] = c > kEventNeighbourFactor * nb;
+        }
+    return out;
+}
+
+// R + G + B block means of the film; with dropEvents the isolated events are left out of their
+// blocks (counted in `events`).
+std::vector<double> blockSums(const Film& film, uint32_t block, bool dropEvents, size_t& events) {
+    const uint32_t w = film.width(), h = film.height();
+    std::vector<double> v(film.pixelCount());
+    for (size_t i = 0; i < v.size(); ++i) {
+        const glm::dvec3 m = film.mean(0, i);
+        v[i] = m.x + m.y + m.z;
+    }
+    const std::vector<bool> drop = dropEvents ? isolatedEvents(v, w, h) : std::vector<bool>(v.size(), false);
+    events = size_t(std::count(drop.begin(), drop.end(), true));
+    std::vector<double> out;
+    for (uint32_t by = 0; by + block <= h; by += block)
+        for (uint32_t bx = 0; bx + block <= w; bx += block) {
+            double sum = 0.0, n = 0.0;
+            for (uint32_t y = by; y < by + block; ++y)
+                for (uint32_t x = bx; x < bx + block; ++x)
+                    if (!drop[size_t(y) * w + x]) {
+                        sum += v[size_t(y) * w + x];
+                        n += 1.0;
+                    }
+            out.push_back(sum / n);
+        }
+    return out;
+}
+
 // refWidth: the reference image's width in pixels.
-Agreement agreement(const Film& film, const Scene& scene, const BlockTable& ref, uint32_t refWidth) {
+Agreement agreement(const Film& film, const Scene& scene, const BlockTable& ref, uint32_t refWidth,
+                    bool dropEvents = false) {
     const uint32_t block = film.width() / ref.columns;
     EXPECT_EQ(film.width(), block * ref.columns);
     EXPECT_EQ(film.height(), block * ref.rows);
-    std::vector<RegionMean> blocks = blockMeans(film, block);
+    size_t events = 0;
+    const std::vector<double> blocks = blockSums(film, block, dropEvents, events);
     const std::vector<bool> skip = lightBlocks(scene, ref, refWidth);
     std::string skipped;
     for (size_t i = 0; i < skip.size(); ++i)
@@ -111,7 +167,7 @@ Agreement agreement(const Film& film, const Scene& scene, const BlockTable& ref,
     for (size_t i = 0; i < ref.sum.size(); ++i) {
         if (skip[i]) continue;
         refTotal += ref.sum[i];
-        total += blocks[i].mean.x + blocks[i].mean.y + blocks[i].mean.z;
+        total += blocks[i];
         ++used;
     }
     const double floor = 0.25 * refTotal / double(used);
@@ -119,7 +175,7 @@ Agreement agreement(const Film& film, const Scene& scene, const BlockTable& ref,
     std::vector<double> signedErrors, absErrors;
     for (size_t i = 0; i < ref.sum.size(); ++i) {
         if (skip[i]) continue;
-        const double v = blocks[i].mean.x + blocks[i].mean.y + blocks[i].mean.z;
+        const double v = blocks[i];
         const double e = std::abs(v - ref.sum[i]) / std::max(ref.sum[i], floor);
         if (e > a.maxError) {
             a.maxError = e;
@@ -140,14 +196,15 @@ Agreement agreement(const Film& film, const Scene& scene, const BlockTable& ref,
     a.p75 = absErrors[absErrors.size() * 3 / 4];
     a.imageError = (total - refTotal) / refTotal;
     a.skipped = skipped;
+    a.events = events;
     return a;
 }
 
 void print(const char* what, const Agreement& a) {
     std::printf("%s: lit blocks: median error %+.2f%%, 75th percentile of |error| %.1f%%; all blocks: max %.1f%% (%s), "
-                "image mean %+.2f%%; lights in blocks%s\n",
+                "image mean %+.2f%%; lights in blocks%s; %zu event pixels left out\n",
                 what, 100 * a.signedMedian, 100 * a.p75, 100 * a.maxError, a.worst.c_str(), 100 * a.imageError,
-                a.skipped.c_str());
+                a.skipped.c_str(), a.events);
 }
 
 // ---- Bounds, calibrated on two renders of the same setting with different seeds ----
@@ -167,21 +224,18 @@ constexpr double kNonExponentialP75Bound = 0.15;
 constexpr double kNonExponentialMaxBound = 1.2;
 constexpr double kNonExponentialImageBound = 0.03;
 
-// volumetric-caustic, 64 x 36, 256 spp. Seeds 5 and 6, one against the other: median difference
-// +0.3%, 75th percentile 14.0%, max 74%, image means 2.3% apart. Against Tungsten (seeds 5, 6; 3
-// at 128 spp; 21 at 2048 spp): median -2.8%, -1.8%, -4.5%, -1.3%; 75th percentile 12.2%, 13.7%,
-// 14.0%, 5.0%. No bound on the max nor on the image mean: the blocks of the volumetric caustic
-// (light focused by the glass ball into the medium and onto the floor) stay 40-95% below Tungsten
-// at every sample count tried (the same values at 128, 256, 2048 and 16384 spp) and hold the image
-// mean 4.5-8% low. A path tracer reaches the caustic only by hitting the 0.005 x 0.004 light
-// through the ball, so this may be paths too rare for these renders, but the values did not move
-// with 8x the samples: it may as well be a real difference. UNRESOLVED (docs/TESTING.md); those
-// blocks are in the upper quarter of the errors, outside these bounds. Bounds: 2x the worst median and
-// 1.8x the worst 75th percentile. The control (max_bounces 7, seed 7): median +17.4%, 75th
-// percentile 35.7% (image mean +9.3%, as Telescope before the bounce counting was fixed).
+// volumetric-caustic, 64 x 36, 256 spp, isolated events left out of both images (see
+// isolatedEvents and the test below). Against Tungsten, nine seeds (3, 5, 6, 11-16): median
+// -3.3% to -0.6%, 75th percentile 8.7-11.1%, max 54-219% (a dim block of floor or wall holding a
+// spike a few pixels wide, no isolated event), image mean -2.0% to +1.5%; the six blocks of the
+// volumetric caustic within -15% to +4%. Bounds: 3x the worst median, 1.6x the worst 75th
+// percentile, 2x the worst max, 2.5x the worst image mean. The control (max_bounces 7, seed 7):
+// median +21.7%, 75th percentile 34.4%, image mean +19.1%.
 constexpr uint64_t kVolumetricCausticSpp = 256;
 constexpr double kVolumetricCausticMedianBound = 0.10;
-constexpr double kVolumetricCausticP75Bound = 0.25;
+constexpr double kVolumetricCausticP75Bound = 0.18;
+constexpr double kVolumetricCausticMaxBound = 4.5;
+constexpr double kVolumetricCausticImageBound = 0.05;
 
 class TungstenScenes : public ::testing::Test {
 protected:
@@ -217,21 +271,39 @@ TEST_F(TungstenScenes, NonExponentialMatchesTungsten) {
 // scattering medium (sigma_s 1) filling the box, a glass ball focusing the small light into a
 // volumetric caustic. Each path holds the crossing of the front boundary, so k = 5 leaves four
 // scattering events inside.
+//
+// The caustic itself is out of reach of a path tracer at any affordable sample count: it is
+// found only when a phase (or Lambert) sample from the vertex next to the ball refracts through
+// the ball onto the 0.005 x 0.004 light, and then adds the light's radiance, R + G + B =
+// 66 / (pi 2e-5) = 1.05e6, to one sample. In Tungsten's 8192-spp reference those are 10 pixels
+// of value 45-129 (1.05e6 / 8192 = 128.2 times the path's albedo) among neighbours below 1, and
+// they make the whole excess of the caustic blocks over Telescope's renders (e.g. block (6, 5):
+// 1.430 with its two events, 0.423 without; Telescope 0.40-0.42 at 128-16384 spp). The expected
+// caustic (a light tracer from the light through the ball, docs/TESTING.md) is about 2.0 in block
+// means summed over the image, i.e. ~4 events in Tungsten's render and ~0.008 in this test's
+// 64 x 36 x 256 samples, where one event would add ~256 to its block. Block means with such
+// events are not comparable at any sample count either render can afford, so both sides leave
+// the isolated events out (the same rule, isolatedEvents and make_block_means.py --drop-events)
+// and compare everything else, the caustic blocks included, with all four statistics.
 TEST_F(TungstenScenes, VolumetricCausticPathTracedMatchesTungsten) {
     const BlockTable ref = readBlocks("tests/data/volumetric-caustic_256x144_pt_8192spp_blocks16.txt");
     const char* scene = "scenes/tungsten/volumetric-caustic/scene.json";
     const uint64_t spp = kVolumetricCausticSpp;
     const std::vector<SceneOverride> base = {{"camera.resolution", "[64,36]"}, {"integrator.type", "\"path_tracer\""}};
     const Scene s = loadTestScene(scene, base);
-    Agreement a = agreement(renderFilm(s, spp, 5), s, ref, 256);
+    Agreement a = agreement(renderFilm(s, spp, 5), s, ref, 256, true);
     print("volumetric-caustic", a);
     EXPECT_LT(std::abs(a.signedMedian), kVolumetricCausticMedianBound);
     EXPECT_LT(a.p75, kVolumetricCausticP75Bound);
+    EXPECT_LT(a.maxError, kVolumetricCausticMaxBound) << a.worst;
+    EXPECT_LT(std::abs(a.imageError), kVolumetricCausticImageBound);
+    EXPECT_LE(a.events, 2u) << "the event rule takes more than rare events out of the render";
     std::vector<SceneOverride> deeperOverrides = base;
     deeperOverrides.push_back({"integrator.max_bounces", "7"});
     const Scene deeper = loadTestScene(scene, deeperOverrides);
-    Agreement control = agreement(renderFilm(deeper, spp, 7), deeper, ref, 256);
+    Agreement control = agreement(renderFilm(deeper, spp, 7), deeper, ref, 256, true);
     print("control, one more bounce (the old counting)", control);
-    EXPECT_TRUE(std::abs(control.signedMedian) > kVolumetricCausticMedianBound || control.p75 > kVolumetricCausticP75Bound)
+    EXPECT_TRUE(std::abs(control.signedMedian) > kVolumetricCausticMedianBound || control.p75 > kVolumetricCausticP75Bound ||
+                control.maxError > kVolumetricCausticMaxBound || std::abs(control.imageError) > kVolumetricCausticImageBound)
         << "the test cannot see a path depth off by one";
 }
