@@ -279,7 +279,7 @@ TEST_F(TungstenScenes, NonExponentialMatchesTungsten) {
 // of value 45-129 (1.05e6 / 8192 = 128.2 times the path's albedo) among neighbours below 1, and
 // they make the whole excess of the caustic blocks over Telescope's renders (e.g. block (6, 5):
 // 1.430 with its two events, 0.423 without; Telescope 0.40-0.42 at 128-16384 spp). The expected
-// caustic (a light tracer from the light through the ball, docs/TESTING.md) is about 2.0 in block
+// caustic (tools/volcaustic/light_tracer.cpp: traced from the light through the ball) is about 2.0 in block
 // means summed over the image, i.e. ~4 events in Tungsten's render and ~0.008 in this test's
 // 64 x 36 x 256 samples, where one event would add ~256 to its block. Block means with such
 // events are not comparable at any sample count either render can afford, so both sides leave
@@ -303,7 +303,8 @@ TEST_F(TungstenScenes, VolumetricCausticPathTracedMatchesTungsten) {
     const Scene deeper = loadTestScene(scene, deeperOverrides);
     Agreement control = agreement(renderFilm(deeper, spp, 7), deeper, ref, 256, true);
     print("control, one more bounce (the old counting)", control);
-    EXPECT_TRUE(std::abs(control.signedMedian) > kVolumetricCausticMedianBound || control.p75 > kVolumetricCausticP75Bound ||
-                control.maxError > kVolumetricCausticMaxBound || std::abs(control.imageError) > kVolumetricCausticImageBound)
+    EXPECT_TRUE(std::abs(control.signedMedian) > kVolumetricCausticMedianBound ||
+                control.p75 > kVolumetricCausticP75Bound || control.maxError > kVolumetricCausticMaxBound ||
+                std::abs(control.imageError) > kVolumetricCausticImageBound)
         << "the test cannot see a path depth off by one";
 }
