@@ -308,3 +308,40 @@ TEST_F(TungstenScenes, VolumetricCausticPathTracedMatchesTungsten) {
                 std::abs(control.imageError) > kVolumetricCausticImageBound)
         << "the test cannot see a path depth off by one";
 }
+
+// The light path of the volumetric caustic, at a sample count where it converges: the scene's
+// glass ball made index-matched (a smooth dielectric of ior 1, gas inside and out) is an
+// invisible boundary, so it must render as a forward sphere holding the gas. Shadow rays pass a
+// forward surface but not a dielectric, so behind the matched ball every bit of light comes from
+// phase (or Lambert) samples that cross the ball and hit the light after two specular vertices,
+// the caustic's path; the light is enlarged to a 1 x 1 quad (the same power) so those samples are
+// common. Both spheres count two bounces per crossing. Independent renders, 4x4-pixel blocks and
+// the image mean, one Sidak family. Control: the matched ball with the wrong medium on one side
+// (ext_medium null: a path leaving the ball goes on in vacuum) against the same image.
+TEST_F(TungstenScenes, VolumetricCausticIndexMatchedBallIsAForwardSphere) {
+    const char* file = "scenes/tungsten/volumetric-caustic/scene.json";
+    auto variant = [&](const char* sphereBsdf, const char* extMedium) {
+        std::vector<SceneOverride> o = {{"camera.resolution", "[32,20]"},
+                                        {"integrator.type", "\"path_tracer\""},
+                                        {"primitives[7].transform.scale", "[1,1,1]"},
+                                        {"bsdfs[6]", sphereBsdf}};
+        o.push_back({"primitives[6].int_medium", "\"gas\""});
+        o.push_back({"primitives[6].ext_medium", extMedium});
+        return loadTestScene(file, o);
+    };
+    const uint64_t spp = 256;
+    const Film forward = renderFilm(variant(R"({"name":"sphere","type":"forward"})", "\"gas\""), spp, 51);
+    const char* matched = R"({"name":"sphere","type":"dielectric","ior":1.0})";
+    const Film glass = renderFilm(variant(matched, "\"gas\""), spp, 52);
+    EXPECT_EQ(glass.nonFiniteSamples(), 0u);
+    const ZSummary z = compareBlocksAndImage(glass, blockMeans(forward, 4), imageMean(forward), 4);
+    std::printf("index-matched ball: image mean %.5f, forward sphere %.5f, max |Z| %.2f (%s)\n",
+                imageMean(glass).mean.x, imageMean(forward).mean.x, z.maxAbsZ, z.worst.c_str());
+    EXPECT_EQ(z.failing, 0u) << z.worst << " (threshold " << z.threshold << ")";
+
+    const Film wrong = renderFilm(variant(matched, "null"), spp, 53);
+    const ZSummary c = compareBlocksAndImage(wrong, blockMeans(forward, 4), imageMean(forward), 4);
+    std::printf("control, vacuum outside the matched ball: %zu of %zu tests fail, worst %s\n", c.failing, c.tests,
+                c.worst.c_str());
+    EXPECT_GT(c.failing, 0u);
+}
