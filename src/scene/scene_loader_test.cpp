@@ -644,7 +644,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"NegativeRoughness", R"({"bsdfs": [{"type": "rough_conductor", "roughness": -0.1}]})", "", "bsdfs[0].roughness", "must not be negative"},
         BadInput{"PlasticNegativeThickness", R"({"bsdfs": [{"type": "plastic", "thickness": -1}]})", "", "bsdfs[0].thickness", "must not be negative"},
         BadInput{"RoughDielectricZeroIor", R"({"bsdfs": [{"type": "rough_dielectric", "ior": 0}]})", "", "bsdfs[0].ior", "must be positive"},
-        BadInput{"OrenNayarTexturedRoughness", R"({"bsdfs": [{"type": "oren_nayar", "roughness": {"type": "checker"}}]})", "", "bsdfs[0].roughness", "textured roughness"},
+        BadInput{"OrenNayarRoughnessCheckerFractionalRes", R"({"bsdfs": [{"type": "oren_nayar", "roughness": {"type": "checker", "res_v": 2.5}}]})", "", "bsdfs[0].roughness.res_v", "expected an integer"},
         BadInput{"PlasticWithPhotons", R"({"primitives": [{"type": "quad", "bsdf": {"type": "plastic"}}], "integrator": {"type": "progressive_photon_map", "gather_radius": 0.1}})", "", "primitives[0].bsdf.type", "photon mapping does not implement"},
         BadInput{"RoughConductorWithPhotons", R"({"bsdfs": [{"name": "cu", "type": "rough_conductor"}], "primitives": [{"type": "quad", "bsdf": "cu"}], "integrator": {"type": "photon_map", "gather_radius": 0.1}})", "", "bsdfs[0].type", "photon mapping does not implement"},
         BadInput{"UnknownBsdfType", R"({"bsdfs": [{"type": "velvet"}]})", "", "bsdfs[0].type", "unknown bsdf type 'velvet'"},
