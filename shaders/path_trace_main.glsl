@@ -34,11 +34,13 @@ layout(constant_id = kSpecLevelSchedule) const uint kLevelSchedule = kLevelSched
 layout(constant_id = kSpecTestPmfWeight) const float kTestPmfWeight = 1.0;
 layout(constant_id = kSpecBsdfFamilies) const uint kBsdfFamilies = kFamilyAll;
 #define BSDF_FAMILIES kBsdfFamilies  // shared/bsdf.h: the glossy families this scene uses
+layout(constant_id = kSpecHasTextures) const bool kHasTextures = false;
 
 layout(std430, binding = kBindingPrims) readonly buffer PrimBuffer { Prim prims[]; };
 layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[]; };
 layout(std430, binding = kBindingMaterials) readonly buffer MaterialBuffer { MaterialGpu materials[]; };
 layout(std430, binding = kBindingLights) readonly buffer LightBuffer { LightGpu lights[]; };
+layout(std430, binding = kBindingTextures) readonly buffer TextureBuffer { vec4 textureData[]; };
 
 layout(constant_id = kSpecSceneInUniforms) const bool kSceneInUniforms = false;
 layout(std140, binding = kBindingBvhUniform) uniform BvhUniform { BvhNode uniformNodes[kMaxUniformNodes]; };

@@ -29,6 +29,20 @@ void addContribution(inout PathResult r, uint bounce, vec3 c, LevelPmf pmf, uint
 }
 
 #include "scene_common.glsl"
+#include "shared/texture.h"
+
+// The material at a hit with its textured parameters looked up at the hit's uv (only materials
+// with a texture pay for the uv; kHasTextures folds all of it out of scenes without textures).
+void applyTextures(inout MaterialGpu m, Prim pr, uint slot, vec2 bary, vec3 p) {
+    if (m.albedoTexture == kNoTexture && m.roughnessTexture == kNoTexture) return;
+    vec2 uv = primUv(slot, pr.type, bary, p, pr.p0);
+    if (m.albedoTexture != kNoTexture) {
+        m.albedo = textureValue(m.albedoTexture, uv);
+        // Plastics: the substrate's share of the sampling follows the albedo (layered.h).
+        m.substrateWeight = (m.albedo.x + m.albedo.y + m.albedo.z) / 3.0 * exp(-2.0 * (m.k.x + m.k.y + m.k.z) / 3.0);
+    }
+    if (m.roughnessTexture != kNoTexture) m.roughness = textureValue(m.roughnessTexture, uv).x;
+}
 
 // Next-event estimation from a Lambertian point p with normal n (facing the viewer):
 // one light picked by power, one shadow ray, MIS against cosine sampling. With media the shadow
@@ -222,6 +236,7 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     if (v > s.limit) return false;  // vertex v only adds light with v or more bounces
 
     MaterialGpu m = materials[pr.material];
+    if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
     if (kHasMedia && m.type == kBsdfForward) {
         // Invisible medium boundary: the ray goes on; the crossing counts as a bounce (Tungsten).
         s.medium = mediumAcross(hit.prim, ng, s.dir, s.medium);

@@ -215,3 +215,56 @@ TEST_F(GlossyRender, IndexMatchedRoughDielectricAroundMediaIsTheForwardBoundary)
     std::printf("control glass boundary: %zu of %zu tests fail, worst %s\n", c.failing, c.tests, c.worst.c_str());
     EXPECT_GT(c.failing, 0u);
 }
+
+// A roughness texture (docs/SCENE-FORMAT.md, "Textures"): the Oren-Nayar plate with a checker of
+// roughness 0.1 and 1 (cells of one unit: res 40 on the 40 x 40 plate). Each pixel is the
+// directional albedo of the roughness of the cell its centre ray hits (Tungsten's quad uv:
+// u = (x + 20) / 40, v = 1 - (z + 20) / 40), tabulated for both values as above. Control: the
+// same render against the cells swapped.
+TEST_F(GlossyRender, CheckerRoughnessPlateMatchesItsCells) {
+    const Scene s = loadTestScene(
+        "scenes/oren-nayar.json",
+        {{"bsdfs[0].roughness", R"({"type": "checker", "on_color": 0.1, "off_color": 1.0, "res_u": 40, "res_v": 40})"}});
+    ASSERT_EQ(s.materials.at(0).roughnessTexture, 0);
+    const std::vector<glm::vec3> wi = pixelViewDirections(s);
+    double maxTheta = 0.0;
+    for (const glm::vec3& w : wi) maxTheta = std::max(maxTheta, std::acos(double(std::clamp(w.z, -1.0f, 1.0f))));
+    Material rough = s.materials[0];
+    rough.roughnessTexture = -1;
+    rough.roughness = 0.1f;
+    const std::array<AlbedoTable, 3> on = albedoTables(telescope::gpuMaterial(rough), maxTheta + 0.01);
+    rough.roughness = 1.0f;
+    const std::array<AlbedoTable, 3> off = albedoTables(telescope::gpuMaterial(rough), maxTheta + 0.01);
+
+    const Camera& c = s.camera;
+    const float d = shader::cameraPlaneDistance(c.fovDegrees);
+    auto expected = [&](bool swapped) {
+        const uint32_t w = c.width, h = c.height, b = 8;
+        std::vector<RegionMean> blocks((w / b) * (h / b));
+        RegionMean image;
+        for (uint32_t y = 0; y < h; ++y)
+            for (uint32_t x = 0; x < w; ++x) {
+                const glm::dvec3 dir(shader::cameraRayDirection(glm::vec2(x + 0.5f, y + 0.5f), w, h, d, c.right, c.up, c.forward));
+                const glm::dvec3 o(c.position);
+                const glm::dvec3 p = o + dir * (-o.y / dir.y);
+                const double u = (p.x + 20.0) / 40.0, v = 1.0 - (p.z + 20.0) / 40.0;
+                const bool isOn = (int(std::floor(u * 40.0)) + int(std::floor(v * 40.0))) % 2 == 1;
+                const std::array<AlbedoTable, 3>& t = isOn != swapped ? on : off;
+                const double th = std::acos(double(std::clamp(wi[y * w + x].z, -1.0f, 1.0f)));
+                const glm::dvec3 val(t[0](th), t[1](th), t[2](th));
+                blocks[(y / b) * (w / b) + x / b].mean += val / double(b * b);
+                image.mean += val / double(w * h);
+            }
+        return std::pair{blocks, image};
+    };
+    const Film film = renderFilm(s, 256, 41);
+    EXPECT_EQ(film.nonFiniteSamples(), 0u);
+    const auto [blocks, image] = expected(false);
+    const ZSummary z = compareBlocksAndImage(film, blocks, image, 8);
+    EXPECT_EQ(z.failing, 0u) << z.worst << " (threshold " << z.threshold << ")";
+    const auto [wrongBlocks, wrongImage] = expected(true);
+    const ZSummary ctl = compareBlocksAndImage(film, wrongBlocks, wrongImage, 8);
+    std::printf("checker roughness: max |Z| %.2f; control with the cells swapped: %zu of %zu tests fail\n", z.maxAbsZ,
+                ctl.failing, ctl.tests);
+    EXPECT_GT(ctl.failing, 0u) << "the test cannot see the roughness cells swapped";
+}

@@ -41,6 +41,11 @@ CONST uint kMicrofacetBeckmann = 0u;
 CONST uint kMicrofacetPhong = 1u;
 CONST uint kMicrofacetGGX = 2u;
 
+// ---- Textures (TextureType; Tungsten's "constant", "checker", "bitmap") ----
+CONST uint kTextureConstant = 0u;
+CONST uint kTextureChecker = 1u;
+CONST uint kTextureBitmap = 2u;
+
 // ---- Lights (LightType for the point-like ones; area lights are emissive prims) ----
 CONST uint kLightArea = 0u;  // an emissive Prim
 CONST uint kLightPoint = 1u;

@@ -31,8 +31,22 @@ struct MaterialGpu {
     float ior; uint flags; float roughness; uint distribution;  // roughness, kMicrofacet*: microfacet types
     vec3 eta; float diffuseFresnel;    // conductors: complex index eta + i k; plastics: Fdr,
     vec3 k; float substrateWeight;     // k = tau = thickness sigma_a, mean(albedo) exp(-2 mean(tau)) (layered.h)
+    uint albedoTexture; uint roughnessTexture; uint texturePad0; uint texturePad1;  // kNoTexture or a TextureGpu index
 };
 CONST uint kMaterialRefraction = 1u;  // flags: dielectric transmits
+
+// ---- Textures (type: kTexture*; shared/texture.h) ----
+// Constant: value = on. Checker: on, off, res = (res_u, res_v). Bitmap: scale = on, res = (width,
+// height), texels (RGBA float, row-major from the top row) from vec4 index `offset` of the texture
+// buffer; flags kTexture*.
+struct TextureGpu {
+    vec3 on; uint type;
+    vec3 off; uint flags;
+    uvec2 res; uint offset; uint pad;
+};
+CONST uint kNoTexture = 0xffffffffu;
+CONST uint kTextureInterpolate = 1u;  // bilinear (Tungsten's "interpolate"), else nearest
+CONST uint kTextureClamp = 2u;        // clamp to the edge (Tungsten's "clamp"), else wrap
 
 // ---- Lights (type: kLight*) ----
 // Radiance: area light (per unit area, one-sided for triangles/disks, outward for spheres),
@@ -74,7 +88,8 @@ static_assert(sizeof(telescope::shader::MediumGpu) == 240);
 static_assert(sizeof(telescope::shader::TrModel) == 48);
 static_assert(sizeof(telescope::shader::Prim) == 64);
 static_assert(sizeof(telescope::shader::BvhNode) == 32);
-static_assert(sizeof(telescope::shader::MaterialGpu) == 64);
+static_assert(sizeof(telescope::shader::MaterialGpu) == 80);
+static_assert(sizeof(telescope::shader::TextureGpu) == 48);
 static_assert(sizeof(telescope::shader::LightGpu) == 48);
 #endif
 
@@ -96,7 +111,10 @@ CONST uint kBindingPrimMedia = 6u;  // uint per prim slot: media on its two side
 // always have a full range.
 CONST uint kBindingBvhUniform = 7u;
 CONST uint kBindingPrimsUniform = 8u;
-CONST uint kPathTraceBindingCount = 9u;
+// Textures (shared/texture.h): one vec4 buffer with the texture table, per-prim uv maps and texels;
+// a dummy vec4 without textures.
+CONST uint kBindingTextures = 9u;
+CONST uint kPathTraceBindingCount = 10u;
 CONST uint kUniformSceneBytes = 65536u;  // maxUniformBufferRange on lavapipe; the Vulkan minimum is 16384
 CONST uint kMaxUniformNodes = 2048u;     // kUniformSceneBytes / sizeof(BvhNode)
 CONST uint kMaxUniformPrims = 1024u;     // kUniformSceneBytes / sizeof(Prim)
@@ -126,6 +144,7 @@ CONST uint kSpecLevelSchedule = 17u;     // kLevelSchedule*: how per-sample leve
 CONST uint kSpecTestPmfWeight = 18u;     // test-only: scales every 1 / p(j) (debias.test_pmf_weight)
 CONST uint kSpecSceneInUniforms = 19u;   // BVH nodes and primitives read from the uniform bindings
 CONST uint kSpecBsdfFamilies = 21u;     // kFamily* bits: the non-delta material families present
+CONST uint kSpecHasTextures = 22u;      // some material has a texture (uvs are computed at its hits)
 
 // Participating media, ids 32..47 (shaders/medium.glsl).
 CONST uint kSpecHasMedia = 32u;          // media or forward (index-matched) boundaries present

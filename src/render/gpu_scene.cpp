@@ -6,9 +6,11 @@
 #include <cmath>
 #include <map>
 
+#include <fmt/format.h>
 #include <glm/gtc/constants.hpp>
 #include <glm/gtc/matrix_access.hpp>
 
+#include "core/error.h"
 #include "scene/density_grid.h"
 
 namespace telescope {
@@ -127,6 +129,8 @@ shader::MaterialGpu gpuMaterial(const Material& m, double diffuseFresnel) {
     g.distribution = m.distribution;
     g.eta = m.eta;
     g.k = m.k;
+    g.albedoTexture = m.albedoTexture >= 0 ? uint32_t(m.albedoTexture) : shader::kNoTexture;
+    g.roughnessTexture = m.roughnessTexture >= 0 ? uint32_t(m.roughnessTexture) : shader::kNoTexture;
     if (m.type == BsdfType::Plastic || m.type == BsdfType::RoughPlastic) {
         g.diffuseFresnel = float(diffuseFresnel < 0.0 ? plasticDiffuseFresnel(m.ior) : diffuseFresnel);
         g.k = m.thickness * m.sigmaA;  // tau
@@ -165,6 +169,7 @@ GpuScene buildGpuScene(const Scene& scene) {
         out.materials.push_back(g);
         if (shader::isSpecularBsdf(uint32_t(m.type))) f.specular = true;
         f.bsdfFamilies |= shader::bsdfFamily(uint32_t(m.type));
+        f.textures = f.textures || m.albedoTexture >= 0 || m.roughnessTexture >= 0;
         if (m.type == BsdfType::Forward) f.media = true;
     }
     if (out.materials.empty()) out.materials.push_back({});  // keep the buffer non-empty
@@ -184,6 +189,7 @@ GpuScene buildGpuScene(const Scene& scene) {
 
     // ---- Prims and area lights ----
     std::vector<float> power;
+    std::vector<glm::vec4> uvRecords;  // two per prim slot (shared/texture.h primUv), textured scenes only
     out.prims.reserve(bvh.order.size());
     for (uint32_t slot = 0; slot < bvh.order.size(); ++slot) {
         const Geometry& g = scene.geometry[bvh.order[slot]];
@@ -209,6 +215,16 @@ GpuScene buildGpuScene(const Scene& scene) {
             out.lights.push_back(l);
             power.push_back(lum * glm::pi<float>() * p.area);
             f.areaLights = true;
+        }
+        if (f.textures) {
+            if (planar) {
+                uvRecords.push_back({g.uv[0], g.uv[1]});
+                uvRecords.push_back({g.uv[2], 0.0f, 0.0f});
+            } else {
+                const float invRadius = g.type == GeometryType::Disk && g.radius > 0.0f ? 1.0f / g.radius : 0.0f;
+                uvRecords.push_back({g.uvFrame[0], invRadius});
+                uvRecords.push_back({g.uvFrame[1], 0.0f});
+            }
         }
         out.prims.push_back(p);
         out.primMedia.push_back(g.hasMedia ? uint32_t(g.intMedium + 1) | (uint32_t(g.extMedium + 1) << 16)
@@ -266,6 +282,35 @@ GpuScene buildGpuScene(const Scene& scene) {
     if (out.media.empty()) out.media.push_back({});
     if (out.gridData.empty()) out.gridData.push_back(0.0f);
     while (out.primMedia.size() < out.prims.size()) out.primMedia.push_back(shader::kPrimMediaNone);
+    // ---- Textures: header, table, uv records, texels (shared/texture.h) ----
+    if (f.textures) {
+        f.textureCount = uint32_t(scene.textures.size());
+        const uint64_t uvBase = 1 + 3 * uint64_t(scene.textures.size());
+        uint64_t texels = 0;
+        for (const Texture& t : scene.textures) texels += t.texels.size();
+        const uint64_t total = uvBase + uvRecords.size() + texels;
+        if (total * sizeof(glm::vec4) > kMaxTextureBytes)
+            throw InputError(scene.path, "bsdfs",
+                             fmt::format("the textures ({} texels) and the uv records of {} primitives need {} MiB, more "
+                                         "than the {} MiB of one texture binding",
+                                         texels, uvRecords.size() / 2, (total * sizeof(glm::vec4)) >> 20,
+                                         kMaxTextureBytes >> 20));
+        out.textureData.reserve(total);
+        out.textureData.push_back({glm::uintBitsToFloat(uint32_t(uvBase)), glm::uintBitsToFloat(f.textureCount), 0.0f, 0.0f});
+        uint64_t texelOffset = uvBase + uvRecords.size();
+        for (const Texture& t : scene.textures) {
+            const uint32_t flags = (t.interpolate ? shader::kTextureInterpolate : 0u) | (t.clamp ? shader::kTextureClamp : 0u);
+            const bool bitmap = t.type == TextureType::Bitmap;
+            out.textureData.push_back({t.on, glm::uintBitsToFloat(uint32_t(t.type))});
+            out.textureData.push_back({t.off, glm::uintBitsToFloat(flags)});
+            out.textureData.push_back({glm::uintBitsToFloat(t.resU), glm::uintBitsToFloat(t.resV),
+                                       glm::uintBitsToFloat(bitmap ? uint32_t(texelOffset) : 0u), 0.0f});
+            if (bitmap) texelOffset += t.texels.size();
+        }
+        out.textureData.insert(out.textureData.end(), uvRecords.begin(), uvRecords.end());
+        for (const Texture& t : scene.textures) out.textureData.insert(out.textureData.end(), t.texels.begin(), t.texels.end());
+    }
+    if (out.textureData.empty()) out.textureData.push_back(glm::vec4(0.0f));
     f.fitsUniforms = out.nodes.size() <= shader::kMaxUniformNodes && out.prims.size() <= shader::kMaxUniformPrims;
     return out;
 }

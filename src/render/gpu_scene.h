@@ -26,6 +26,8 @@ struct SceneFeatures {
     bool grids = false;         // grid media
     uint32_t mediumCount = 0;
     bool fitsUniforms = false;  // nodes and prims fit the path tracer's uniform bindings
+    bool textures = false;      // some material has a textured parameter
+    uint32_t textureCount = 0;
 };
 
 // A plastic's coat reflects this fraction of the cosine-weighted light reaching it from inside
@@ -43,8 +45,12 @@ struct GpuScene {
     std::vector<shader::MediumGpu> media;    // never empty (a dummy without media)
     std::vector<float> gridData;             // voxels of every grid medium
     std::vector<uint32_t> primMedia;         // per prim slot (shader::kPrimMediaNone or packed)
+    std::vector<glm::vec4> textureData;      // shared/texture.h's layout (one dummy vec4 without textures)
     SceneFeatures features;
 };
+
+// The largest texture buffer: one storage-buffer binding (maxStorageBufferRange, 128 MiB on lavapipe).
+constexpr uint64_t kMaxTextureBytes = uint64_t(128) << 20;
 
 // Lights are picked in proportion to their emitted power (luminance of the radiance times
 // pi times the area for area lights, 4 pi times the intensity for point lights); the environment

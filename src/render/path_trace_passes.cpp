@@ -100,6 +100,8 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
           std::tuple{shader::kFamilyRoughDielectric, "rough_dielectric", "rough_dielectric materials present",
                      "no rough_dielectric materials"}})
         feature(name, (f.bsdfFamilies & bit) != 0u, yes, no);
+    feature("textures", f.textures, "textured material parameters (uvs computed at their hits)",
+            "no textured materials");
     feature("light sampling", in.enableLightSampling && f.lightCount > 0, "next-event estimation",
             in.enableLightSampling ? "no lights" : "enable_light_sampling is false");
     feature("environment", f.environment, "infinite_sphere emitter", "no environment emitter");
@@ -138,6 +140,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecTestPmfWeight, gpu::specFloat(in.debias.testPmfWeight)},
         {kSpecSceneInUniforms, f.fitsUniforms},
         {kSpecBsdfFamilies, f.bsdfFamilies},
+        {kSpecHasTextures, f.textures},
         {kSpecHasMedia, f.media},
         {kSpecTrEstimator, uint32_t(in.transmittance.type)},
         {kSpecTrLevel, in.transmittance.level},
@@ -161,7 +164,7 @@ public:
                     deviceSpec(context, plan.pathTraceSpec),
                     (1u << shader::kBindingBvhUniform) | (1u << shader::kBindingPrimsUniform)) {
         pipeline_.bindBuffers(
-            {b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims});
+            {b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims, b.textures});
         const Camera& cam = scene.camera;
         setPushCamera(push_, cam);
         push_.width = cam.width;

@@ -53,6 +53,7 @@ struct RenderBuffers {
     const gpu::Buffer* media = nullptr;
     const gpu::Buffer* gridData = nullptr;
     const gpu::Buffer* primMedia = nullptr;
+    const gpu::Buffer* textures = nullptr;  // binding 9 of path_trace (shared/texture.h)
 };
 
 class SamplePasses {

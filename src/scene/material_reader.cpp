@@ -46,7 +46,9 @@ Material SceneReader::readBsdf(const json& v, const std::string& key) {
     m.key = key;
     rejectMedia(v, key, {"int_medium", "ext_medium"});
     if (const json* name = find(v, "name")) m.name = string(*name, member(key, "name"));
-    if (const json* albedo = find(v, "albedo")) m.albedo = colour(*albedo, member(key, "albedo"));
+    if (const json* albedo = find(v, "albedo")) {
+        if (auto t = readTexture(*albedo, member(key, "albedo"), false, m.albedo)) m.albedoTexture = int32_t(*t);
+    }
     if (m.type == BsdfType::Dielectric) {
         if (const json* ior = find(v, "ior")) {
             m.ior = number(*ior, member(key, "ior"));
@@ -71,7 +73,7 @@ Material SceneReader::readBsdf(const json& v, const std::string& key) {
         ignoreUnread(v, key, read);
     } else if (m.type == BsdfType::OrenNayar) {
         m.roughness = 1.0f;  // Tungsten's default
-        if (const json* r = find(v, "roughness")) m.roughness = roughness(*r, member(key, "roughness"));
+        if (const json* r = find(v, "roughness")) readRoughness(*r, member(key, "roughness"), m);
         ignoreUnread(v, key, {"name", "type", "albedo", "roughness"});
     } else if (m.type == BsdfType::RoughDielectric) {
         readIor(v, key, m);
@@ -124,15 +126,26 @@ void SceneReader::readMicrofacet(const json& v, const std::string& key, Material
         else if (name == "phong") m.distribution = shader::kMicrofacetPhong;
         else fail(member(key, "distribution"), fmt::format("unknown distribution '{}' (ggx, beckmann, phong)", name));
     }
-    if (const json* r = find(v, "roughness")) m.roughness = roughness(*r, member(key, "roughness"));
+    if (const json* r = find(v, "roughness")) readRoughness(*r, member(key, "roughness"), m);
     read.insert(read.end(), {"distribution", "roughness"});
 }
 
 float SceneReader::roughness(const json& v, const std::string& key) const {
-    if (!v.is_number()) fail(key, "expected a number (textured roughness is not supported), got " + quote(v));
+    if (!v.is_number()) fail(key, "expected a number, got " + quote(v));
     const float r = number(v, key);
     if (!(r >= 0.0f)) fail(key, "the roughness must not be negative");
     return r;
+}
+
+// A number, or a texture read as a scalar (its first channel; a bitmap's mean of R, G, B).
+void SceneReader::readRoughness(const json& v, const std::string& key, Material& m) {
+    if (v.is_number()) {
+        m.roughness = roughness(v, key);
+        return;
+    }
+    glm::vec3 constant(m.roughness);
+    if (auto t = readTexture(v, key, true, constant)) m.roughnessTexture = int32_t(*t);
+    else m.roughness = roughness(json(constant.x), key);
 }
 
 void SceneReader::readIor(const json& v, const std::string& key, Material& m) {

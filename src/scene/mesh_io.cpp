@@ -53,7 +53,11 @@ MeshData MeshReader::wo3() const {
     const uint64_t numVerts = readU64();
     if (numVerts > (bytes.size() - offset) / kVertexBytes) malformed(fmt::format("{} vertices do not fit in the file", numVerts));
     mesh.positions.resize(numVerts);
-    for (uint64_t i = 0; i < numVerts; ++i) std::memcpy(&mesh.positions[i], bytes.data() + offset + i * kVertexBytes, 12);
+    std::vector<glm::vec2> vertexUvs(numVerts);
+    for (uint64_t i = 0; i < numVerts; ++i) {
+        std::memcpy(&mesh.positions[i], bytes.data() + offset + i * kVertexBytes, 12);
+        std::memcpy(&vertexUvs[i], bytes.data() + offset + i * kVertexBytes + 24, 8);
+    }
     offset += numVerts * kVertexBytes;
 
     const uint64_t numTris = readU64();
@@ -62,12 +66,14 @@ MeshData MeshReader::wo3() const {
         malformed(fmt::format("{} bytes after the triangle list", bytes.size() - offset - numTris * kTriangleBytes));
     mesh.triangles.resize(numTris);
     mesh.materials.resize(numTris);
+    mesh.uvs.resize(numTris);
     for (uint64_t i = 0; i < numTris; ++i) {
         const char* record = bytes.data() + offset + i * kTriangleBytes;
         std::memcpy(mesh.triangles[i].data(), record, 12);
         std::memcpy(&mesh.materials[i], record + 12, 4);
         for (uint32_t index : mesh.triangles[i])
             if (index >= numVerts) malformed(fmt::format("triangle {} uses vertex {} of {}", i, index, numVerts));
+        for (int k = 0; k < 3; ++k) mesh.uvs[i][k] = vertexUvs[mesh.triangles[i][k]];
     }
     for (uint64_t i = 0; i < numVerts; ++i)
         if (!std::isfinite(mesh.positions[i].x) || !std::isfinite(mesh.positions[i].y) || !std::isfinite(mesh.positions[i].z))
@@ -91,6 +97,7 @@ MeshData MeshReader::obj() const {
 
     MeshData mesh;
     const std::vector<tinyobj::real_t>& v = reader.GetAttrib().vertices;
+    const std::vector<tinyobj::real_t>& texcoords = reader.GetAttrib().texcoords;
     if (v.size() % 3 != 0) malformed("incomplete vertex list");
     mesh.positions.resize(v.size() / 3);
     for (size_t i = 0; i < mesh.positions.size(); ++i) {
@@ -105,13 +112,23 @@ MeshData MeshReader::obj() const {
             const size_t count = m.num_face_vertices[f];
             if (count != 3) malformed(fmt::format("face with {} vertices after triangulation", count));
             std::array<uint32_t, 3> tri;
+            std::array<glm::vec2, 3> uv{};
             for (size_t k = 0; k < 3; ++k) {
                 const int index = m.indices[first + k].vertex_index;
                 if (index < 0 || size_t(index) >= mesh.positions.size())
                     malformed(fmt::format("a face in '{}' uses vertex {} of {}", shape.name, index + 1, mesh.positions.size()));
                 tri[k] = uint32_t(index);
+                // "vt" coordinates as the file gives them; a vertex without one gets uv 0
+                const int t = m.indices[first + k].texcoord_index;
+                if (t >= 0) {
+                    if (2 * size_t(t) + 1 >= texcoords.size())
+                        malformed(fmt::format("a face in '{}' uses texture coordinate {} of {}", shape.name, t + 1,
+                                              texcoords.size() / 2));
+                    uv[k] = {texcoords[2 * size_t(t)], texcoords[2 * size_t(t) + 1]};
+                }
             }
             mesh.triangles.push_back(tri);
+            mesh.uvs.push_back(uv);
             mesh.materials.push_back(f < m.material_ids.size() ? std::max(m.material_ids[f], 0) : 0);
             first += count;
         }

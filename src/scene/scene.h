@@ -24,6 +24,23 @@ enum class BsdfType : uint32_t {
     OrenNayar = shader::kBsdfOrenNayar, RoughDielectric = shader::kBsdfRoughDielectric
 };
 
+// A texture on a material parameter (Tungsten's constant, checker and bitmap; shared/texture.h).
+enum class TextureType : uint32_t {
+    Constant = shader::kTextureConstant, Checker = shader::kTextureChecker, Bitmap = shader::kTextureBitmap
+};
+
+struct Texture {
+    TextureType type = TextureType::Constant;
+    std::string key;              // where it was defined ("bsdfs[0].albedo"), for messages
+    glm::vec3 on{0.8f};           // constant: the value; checker: on_color; bitmap: scale
+    glm::vec3 off{0.2f};          // checker: off_color
+    uint32_t resU = 20, resV = 20;  // checker: res_u, res_v; bitmap: width, height
+    bool interpolate = true;      // bitmap: bilinear, else nearest
+    bool clamp = false;           // bitmap: clamp at the edges, else wrap
+    bool gammaCorrect = true;     // bitmap: 8-bit (LDR) files are sRGB, converted to linear
+    std::vector<glm::vec4> texels;  // bitmap: linear RGBA, row-major from the top row
+};
+
 struct Material {
     std::string name;
     std::string key;               // where it was defined ("bsdfs[2]"), for messages
@@ -40,6 +57,9 @@ struct Material {
     // Plastics: the coat's thickness and absorption (Tungsten's defaults 1 and 0).
     float thickness = 1.0f;
     glm::vec3 sigmaA{0.0f};
+    // Textured parameters: index into Scene::textures, -1 = the constant above.
+    int32_t albedoTexture = -1;
+    int32_t roughnessTexture = -1;
 };
 
 // Whether the photon tracer and gather implement a material (the others are path tracing's).
@@ -63,6 +83,11 @@ struct Geometry {
     uint32_t material = 0;                   // index into Scene::materials
     glm::vec3 emission{0.0f};                // radiance, already converted from "power"
     uint32_t shape = 0;                      // index into Scene::shapes (the source primitive)
+    // Tungsten's uv parameterisation (shared/texture.h primUv): triangle and quad: the uvs of
+    // p0, p1, p2; sphere: the world-to-local rotation's rows x, y in uvFrame[0], [1]; disk:
+    // Tungsten's bitangent and tangent in uvFrame[0], [1].
+    glm::vec2 uv[3] = {glm::vec2(0.0f), glm::vec2(0.0f), glm::vec2(0.0f)};
+    glm::vec3 uvFrame[2] = {glm::vec3(1.0f, 0.0f, 0.0f), glm::vec3(0.0f, 1.0f, 0.0f)};
     // Media on the two sides (index into Scene::media, -1 = vacuum); used only if hasMedia
     // (a primitive without int_medium / ext_medium leaves the current medium unchanged).
     bool hasMedia = false;
@@ -248,6 +273,7 @@ struct Scene {
     std::string path;                 // file it was loaded from
     nlohmann::json document;          // the (overridden) JSON, for output metadata
     std::vector<Material> materials;
+    std::vector<Texture> textures;    // of material parameters
     std::vector<Geometry> geometry;
     std::vector<PointLikeLight> lights;
     std::vector<Shape> shapes;

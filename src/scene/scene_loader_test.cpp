@@ -546,6 +546,46 @@ TEST(SceneOverrides, ScalarAndBooleanValues) {
     EXPECT_FALSE(s.integrator.enableLightSampling);
 }
 
+// Textures (docs/SCENE-FORMAT.md, "Textures"): Tungsten's value forms and defaults.
+TEST(SceneLoader, TexturesOnAlbedoAndRoughness) {
+    const Scene s = load(withPrimitive(R"({"type": "quad", "bsdf": {"type": "oren_nayar",
+        "albedo": {"type": "checker", "on_color": [1, 0.5, 0], "res_u": 3},
+        "roughness": {"type": "checker", "on_color": [0.7, 0.1, 0.1], "off_color": 0.2, "res_v": 5}}},
+        {"type": "quad", "bsdf": {"type": "rough_conductor", "albedo": {"type": "constant", "value": 0.25},
+                                  "roughness": [0.3, 0.4, 0.5]}},
+        {"type": "quad", "bsdf": {"type": "lambert", "albedo": {"type": "checker"}}})"));
+    const Material& on = s.materials[s.geometry[0].material];
+    ASSERT_EQ(on.albedoTexture, 0);
+    ASSERT_EQ(on.roughnessTexture, 1);
+    const Texture& albedo = s.textures[0];
+    EXPECT_EQ(albedo.type, TextureType::Checker);
+    expectVec(albedo.on, {1.0f, 0.5f, 0.0f});
+    expectVec(albedo.off, glm::vec3(0.2f));  // Tungsten's defaults: 0.2, res 20
+    EXPECT_EQ(albedo.resU, 3u);
+    EXPECT_EQ(albedo.resV, 20u);
+    // A scalar parameter takes the first channel.
+    expectVec(s.textures[1].on, glm::vec3(0.7f));
+    expectVec(s.textures[1].off, glm::vec3(0.2f));
+    EXPECT_EQ(s.textures[1].resV, 5u);
+    // Constants stay constants: no texture.
+    const Material& cu = s.materials[s.geometry[1].material];
+    EXPECT_EQ(cu.albedoTexture, -1);
+    EXPECT_EQ(cu.roughnessTexture, -1);
+    expectVec(cu.albedo, glm::vec3(0.25f));
+    EXPECT_FLOAT_EQ(cu.roughness, 0.3f);
+    const Texture& plain = s.textures[s.materials[s.geometry[2].material].albedoTexture];
+    expectVec(plain.on, glm::vec3(0.8f));
+    EXPECT_EQ(plain.resU, 20u);
+    // Tungsten's quad uv: (0, 1) at the base corner, (1, 1) along the local x edge, (0, 0) along z
+    // (the three corners the quad stores, in its own order).
+    const Geometry& q = s.geometry[0];
+    for (int k = 0; k < 3; ++k) {
+        const glm::vec3 p = k == 0 ? q.p0 : k == 1 ? q.p1 : q.p2;
+        EXPECT_FLOAT_EQ(q.uv[k].x, p.x + 0.5f) << k;
+        EXPECT_FLOAT_EQ(q.uv[k].y, 0.5f - p.z) << k;
+    }
+}
+
 // ---- Bad input: each error names the file and the offending key path ----
 
 struct BadInput {
@@ -566,6 +606,7 @@ TEST_P(SceneLoaderBadInput, NamesFileAndKey) {
     writeFile("garbage.obj", "this is not an obj\nf a b c\n");
     writeFile("oob.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
     writeFile("short.wo3", std::string("\x05\0\0\0\0\0\0\0abc", 11));
+    writeFile("garbage.png", "this is not a png\n");
     try {
         std::vector<SceneOverride> overrides;
         if (!c.override_.empty()) overrides.push_back(parseOverride(c.override_));
@@ -598,11 +639,12 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"ConductorEtaWithoutK", R"({"bsdfs": [{"type": "rough_conductor", "eta": 1.2}]})", "", "bsdfs[0].k", "go together"},
         BadInput{"ConductorMaterialAndEta", R"({"bsdfs": [{"type": "conductor", "material": "Au", "eta": 1, "k": 2}]})", "", "bsdfs[0].eta", "not both"},
         BadInput{"UnknownDistribution", R"({"bsdfs": [{"type": "rough_conductor", "distribution": "blinn"}]})", "", "bsdfs[0].distribution", "unknown distribution 'blinn'"},
-        BadInput{"TexturedRoughness", R"({"bsdfs": [{"type": "rough_conductor", "roughness": "r.png"}]})", "", "bsdfs[0].roughness", "expected a number"},
+        BadInput{"MissingRoughnessBitmap", R"({"bsdfs": [{"type": "rough_conductor", "roughness": "r.png"}]})", "", "bsdfs[0].roughness", "cannot open image file"},
+        BadInput{"RoughnessTextureBadType", R"({"bsdfs": [{"type": "oren_nayar", "roughness": true}]})", "", "bsdfs[0].roughness", "expected a number, a colour"},
         BadInput{"NegativeRoughness", R"({"bsdfs": [{"type": "rough_conductor", "roughness": -0.1}]})", "", "bsdfs[0].roughness", "must not be negative"},
         BadInput{"PlasticNegativeThickness", R"({"bsdfs": [{"type": "plastic", "thickness": -1}]})", "", "bsdfs[0].thickness", "must not be negative"},
         BadInput{"RoughDielectricZeroIor", R"({"bsdfs": [{"type": "rough_dielectric", "ior": 0}]})", "", "bsdfs[0].ior", "must be positive"},
-        BadInput{"OrenNayarTexturedRoughness", R"({"bsdfs": [{"type": "oren_nayar", "roughness": {"type": "checker"}}]})", "", "bsdfs[0].roughness", "textured roughness"},
+        BadInput{"OrenNayarRoughnessCheckerFractionalRes", R"({"bsdfs": [{"type": "oren_nayar", "roughness": {"type": "checker", "res_v": 2.5}}]})", "", "bsdfs[0].roughness.res_v", "expected an integer"},
         BadInput{"PlasticWithPhotons", R"({"primitives": [{"type": "quad", "bsdf": {"type": "plastic"}}], "integrator": {"type": "progressive_photon_map", "gather_radius": 0.1}})", "", "primitives[0].bsdf.type", "photon mapping does not implement"},
         BadInput{"RoughConductorWithPhotons", R"({"bsdfs": [{"name": "cu", "type": "rough_conductor"}], "primitives": [{"type": "quad", "bsdf": "cu"}], "integrator": {"type": "photon_map", "gather_radius": 0.1}})", "", "bsdfs[0].type", "photon mapping does not implement"},
         BadInput{"UnknownBsdfType", R"({"bsdfs": [{"type": "velvet"}]})", "", "bsdfs[0].type", "unknown bsdf type 'velvet'"},
@@ -610,8 +652,14 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"MissingBsdf", withPrimitive(R"({"type": "sphere"})"), "", "primitives[0]", "missing 'bsdf'"},
         BadInput{"AlbedoWrongType", R"({"bsdfs": [{"type": "lambert", "albedo": true}]})", "", "bsdfs[0].albedo", "expected a number"},
         BadInput{"AlbedoNegative", R"({"bsdfs": [{"type": "lambert", "albedo": [1, -1, 1]}]})", "", "bsdfs[0].albedo", "non-negative"},
-        BadInput{"BitmapTexture", R"({"bsdfs": [{"type": "lambert", "albedo": "wood.png"}]})", "", "bsdfs[0].albedo", "textures are not supported"},
-        BadInput{"TextureObject", R"({"bsdfs": [{"type": "lambert", "albedo": {"type": "checker"}}]})", "", "bsdfs[0].albedo", "textures are not supported"},
+        BadInput{"MissingBitmap", R"({"bsdfs": [{"type": "lambert", "albedo": "wood.png"}]})", "", "bsdfs[0].albedo", "cannot open image file"},
+        BadInput{"UnreadableBitmap", R"({"bsdfs": [{"type": "lambert", "albedo": {"type": "bitmap", "file": "garbage.png"}}]})", "", "bsdfs[0].albedo.file", "cannot read image"},
+        BadInput{"BitmapWithoutFile", R"({"bsdfs": [{"type": "lambert", "albedo": {"type": "bitmap"}}]})", "", "bsdfs[0].albedo", "needs a \"file\""},
+        BadInput{"UnknownTextureType", R"({"bsdfs": [{"type": "lambert", "albedo": {"type": "wood"}}]})", "", "bsdfs[0].albedo.type", "unknown texture type 'wood'"},
+        BadInput{"UnsupportedTextureType", R"({"bsdfs": [{"type": "lambert", "albedo": {"type": "ies"}}]})", "", "bsdfs[0].albedo.type", "unsupported texture type 'ies'"},
+        BadInput{"CheckerZeroResU", R"({"bsdfs": [{"type": "lambert", "albedo": {"type": "checker", "res_u": 0}}]})", "", "bsdfs[0].albedo.res_u", "expected an integer"},
+        BadInput{"CheckerNegativeColour", R"({"bsdfs": [{"type": "lambert", "albedo": {"type": "checker", "off_color": -1}}]})", "", "bsdfs[0].albedo.off_color", "non-negative"},
+        BadInput{"TexturedAlbedoWithPhotons", R"({"primitives": [{"type": "quad", "bsdf": {"type": "lambert", "albedo": {"type": "checker"}}}], "integrator": {"type": "photon_map", "gather_radius": 0.1}})", "", "primitives[0].bsdf.albedo", "photon mapping does not implement textured"},
         BadInput{"BitmapEmission", withPrimitive(R"({"type": "infinite_sphere", "emission": "sky.hdr"})"), "", "primitives[0].emission", "textures are not supported"},
         BadInput{"ScaleWrongLength", withPrimitive(R"({"type": "quad", "bsdf": "white", "transform": {"scale": [1, 2]}})"), "", "primitives[0].transform.scale", "3 numbers"},
         BadInput{"ScaleComponentString", withPrimitive(R"({"type": "quad", "bsdf": "white", "transform": {"scale": [1, "2", 3]}})"), "", "primitives[0].transform.scale[1]", "expected a number"},

@@ -94,6 +94,12 @@ private:
     void readMicrofacet(const json& v, const std::string& key, Material& m, std::vector<std::string_view>& read);
     void readIor(const json& v, const std::string& key, Material& m);
     float roughness(const json& v, const std::string& key) const;
+    void readRoughness(const json& v, const std::string& key, Material& m);
+
+    // Textures (texture_reader.cpp): a texture index, or nothing for a constant (set in `constant`).
+    std::optional<uint32_t> readTexture(const json& v, const std::string& key, bool scalar, glm::vec3& constant);
+    void readBitmap(const json& file, const std::string& key, Texture& t, bool scalar);
+    static uint64_t textureTexelBudget();
 
     // Shapes (shape_reader.cpp)
     void readPrimitive(const json& v, const std::string& key);

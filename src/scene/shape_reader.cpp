@@ -29,13 +29,15 @@ Geometry triangle(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
 
 // One analytic quad for the parallelogram base + [0,1] e0 + [0,1] e1 (Tungsten's quad and cube
 // faces are analytic too), its edges ordered so that cross(p1 - p0, p2 - p0) points along the
-// given unit normal.
+// given unit normal. uvBase, uv0, uv1: Tungsten's uvs at base, base + e0 and base + e1.
 void appendParallelogram(std::vector<Geometry>& out, const glm::vec3& base, const glm::vec3& e0,
-                         const glm::vec3& e1, const glm::vec3& normal) {
-    const glm::vec3 a = glm::dot(glm::cross(e0, e1), normal) >= 0.0f ? e0 : e1;
-    const glm::vec3 b = a == e0 ? e1 : e0;
-    Geometry g = triangle(base, base + a, base + b, normal);
+                         const glm::vec3& e1, const glm::vec3& normal, glm::vec2 uvBase, glm::vec2 uv0, glm::vec2 uv1) {
+    const bool keep = glm::dot(glm::cross(e0, e1), normal) >= 0.0f;
+    Geometry g = triangle(base, base + (keep ? e0 : e1), base + (keep ? e1 : e0), normal);
     g.type = GeometryType::Quad;
+    g.uv[0] = uvBase;
+    g.uv[1] = keep ? uv0 : uv1;
+    g.uv[2] = keep ? uv1 : uv0;
     out.push_back(g);
 }
 
@@ -121,7 +123,10 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
         const glm::vec3 e0 = transformVector(m, {1, 0, 0}), e1 = transformVector(m, {0, 0, 1});
         const glm::vec3 n = glm::cross(e1, e0);
         area = glm::length(n);
-        if (!isDegenerate(n)) appendParallelogram(shapeGeometry, transformPoint(m, glm::vec3(0.0f)) - 0.5f * (e0 + e1), e0, e1, n / float(area));
+        // Tungsten's quad uv at base + l0 e0 + l1 e1 is (l0, 1 - l1).
+        if (!isDegenerate(n))
+            appendParallelogram(shapeGeometry, transformPoint(m, glm::vec3(0.0f)) - 0.5f * (e0 + e1), e0, e1, n / float(area),
+                                {0.0f, 1.0f}, {1.0f, 1.0f}, {0.0f, 0.0f});
     } else if (type == "cube") {
         // Unit cube [-0.5, 0.5]^3 placed by the rotation, column lengths and translation of M
         const glm::mat3 rot = columnDirections(m);
@@ -133,7 +138,9 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
                 const glm::vec3 n = sign * rot[dim];
                 const glm::vec3 u = 2.0f * half[s] * rot[s], w = 2.0f * half[t] * rot[t];
                 if (isDegenerate(glm::cross(u, w)) || isDegenerate(n)) continue;
-                appendParallelogram(shapeGeometry, centre + half[dim] * n - 0.5f * (u + w), u, w, n);
+                // Tungsten's cube uv on this face: the local coordinates along s and t, in [0, 1].
+                appendParallelogram(shapeGeometry, centre + half[dim] * n - 0.5f * (u + w), u, w, n, {0.0f, 0.0f},
+                                    {1.0f, 0.0f}, {0.0f, 1.0f});
             }
         }
     } else if (type == "sphere") {
@@ -143,6 +150,10 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
         g.type = GeometryType::Sphere;
         g.p0 = glm::vec3(m[3]);
         g.radius = std::max({lengths.x, lengths.y, lengths.z});
+        // Tungsten's sphere uv is taken in the sphere's local frame: rows of the inverse rotation.
+        const glm::mat3 rot = columnDirections(m);
+        g.uvFrame[0] = rot[0];
+        g.uvFrame[1] = rot[1];
         area = 4.0 * kPi * double(g.radius) * g.radius;
         if (g.radius > 0.0f) shapeGeometry.push_back(g);
     } else if (type == "disk") {
@@ -156,6 +167,12 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
         area = kPi * double(g.radius) * g.radius;
         if (g.radius > 0.0f && !isDegenerate(n)) {
             g.normal = glm::normalize(n);
+            // Tungsten's TangentFrame(n) of the disk: its uv is (azimuth, r / radius) in this frame.
+            glm::vec3 tangent = std::abs(g.normal.x) > std::abs(g.normal.y) ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+            const glm::vec3 bitangent = glm::normalize(glm::cross(g.normal, tangent));
+            tangent = glm::cross(bitangent, g.normal);
+            g.uvFrame[0] = bitangent;
+            g.uvFrame[1] = tangent;
             shapeGeometry.push_back(g);
         }
     } else {
@@ -173,6 +190,7 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
             if (isDegenerate(n)) continue;
             area += 0.5 * glm::length(n);
             Geometry g = triangle(world[t[0]], world[t[1]], world[t[2]], glm::normalize(n));
+            for (int k = 0; k < 3; ++k) g.uv[k] = mesh.uvs[i][k];
             g.material = materials[std::clamp<int32_t>(mesh.materials[i], 0, int32_t(materials.size()) - 1)];
             shapeGeometry.push_back(g);
         }
