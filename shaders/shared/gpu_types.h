@@ -31,8 +31,12 @@ struct MaterialGpu {
     float ior; uint flags; float roughness; uint distribution;  // roughness, kMicrofacet*: microfacet types
     vec3 eta; float diffuseFresnel;    // conductors: complex index eta + i k; plastics: Fdr,
     vec3 k; float substrateWeight;     // k = tau = thickness sigma_a, mean(albedo) exp(-2 mean(tau)) (layered.h)
+    // mixed: components 0 and 1 (material indices), ratio = the weight of component 0; transparency:
+    // component0 = the base, alpha = its opacity (thinsheet: roughness = thickness, k = thickness sigma_a)
+    uint component0; uint component1; float ratio; float alpha;
 };
 CONST uint kMaterialRefraction = 1u;  // flags: dielectric transmits
+CONST uint kMaterialInterference = 2u;  // flags: thinsheet with thin-film interference
 
 // ---- Lights (type: kLight*) ----
 // Radiance: area light (per unit area, one-sided for triangles/disks, outward for spheres),
@@ -74,7 +78,7 @@ static_assert(sizeof(telescope::shader::MediumGpu) == 240);
 static_assert(sizeof(telescope::shader::TrModel) == 48);
 static_assert(sizeof(telescope::shader::Prim) == 64);
 static_assert(sizeof(telescope::shader::BvhNode) == 32);
-static_assert(sizeof(telescope::shader::MaterialGpu) == 64);
+static_assert(sizeof(telescope::shader::MaterialGpu) == 80);
 static_assert(sizeof(telescope::shader::LightGpu) == 48);
 #endif
 

@@ -127,6 +127,15 @@ shader::MaterialGpu gpuMaterial(const Material& m, double diffuseFresnel) {
     g.distribution = m.distribution;
     g.eta = m.eta;
     g.k = m.k;
+    g.component0 = m.component[0];
+    g.component1 = m.component[1];
+    g.ratio = m.ratio;
+    g.alpha = m.alpha;
+    if (m.type == BsdfType::ThinSheet) {
+        g.roughness = m.thickness;
+        g.k = m.thickness * m.sigmaA;  // tau
+        if (m.enableInterference) g.flags |= shader::kMaterialInterference;
+    }
     if (m.type == BsdfType::Plastic || m.type == BsdfType::RoughPlastic) {
         g.diffuseFresnel = float(diffuseFresnel < 0.0 ? plasticDiffuseFresnel(m.ior) : diffuseFresnel);
         g.k = m.thickness * m.sigmaA;  // tau
