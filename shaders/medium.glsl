@@ -12,6 +12,8 @@
 // (forms of shared/transmittance.h; start = surface or medium vertex). Media are indexed + 1
 // (0 = vacuum) in the path state.
 
+#include "shared/bsdf.h"  // thinSheetReflectance (shadow rays through thin sheets)
+
 layout(constant_id = kSpecHasMedia) const bool kHasMedia = false;
 layout(constant_id = kSpecTrEstimator) const uint kTrEstimatorType = 1u;
 layout(constant_id = kSpecTrLevel) const uint kTrLevel = 1u;
@@ -255,6 +257,30 @@ vec3 primNormalAt(Prim pr, vec3 p) {
 
 // Transmittance along a shadow ray from o to o + tMax d: forward surfaces let it through (each
 // counts as a bounce, as in Tungsten), anything else blocks it; every medium segment is estimated.
+// Thin sheets and transparency let shadow rays through (Tungsten's generalizedShadowRay
+// multiplies by every surface's forward transmittance): the kFamilyPassThrough families.
+const bool kHasPassThrough = (kBsdfFamilies & kFamilyPassThrough) != 0u;
+
+// Forward transmittance of material m for a ray at |cos| cosI (shared/bsdf.h; Tungsten's
+// eval of the forward lobe): a thin sheet's T, 1 - alpha for transparency, 1 for a forward
+// boundary, 0 for the rest; a mixed material picks one component by its ratio (an unbiased
+// estimate of the ratio-weighted sum) and weighs it by its albedo.
+vec3 passThroughTransmittance(MaterialGpu m, float cosI, inout Rng rng) {
+    vec3 w = vec3(1.0);
+    for (uint level = 0u; level < kMaxMaterialNesting && m.type == kBsdfMixed; ++level) {
+        w *= m.albedo;
+        m = materials[mixedComponent(m, rngNext(rng))];
+    }
+    if (m.type == kBsdfTransparency) return w * (1.0 - m.alpha);
+    if (m.type == kBsdfForward) return w;
+    if (m.type == kBsdfThinSheet) {
+        vec3 t;
+        thinSheetReflectance(m, cosI, t);
+        return w * t;
+    }
+    return vec3(0.0);
+}
+
 vec3 shadowTransmittance(vec3 o, vec3 d, float tMax, uint medium, bool startOnSurface, inout Rng rng,
                          out uint crossings) {
     crossings = 0u;
@@ -271,11 +297,15 @@ vec3 shadowTransmittance(vec3 o, vec3 d, float tMax, uint medium, bool startOnSu
         }
         if (!found) return tr;
         Prim pr = BVH_PRIM(hit.prim);
-        if (materials[pr.material].type != kBsdfForward) return vec3(0.0);
-        if (tr == vec3(0.0)) return tr;
         vec3 p = o + d * hit.t;
         vec3 ng = primNormalAt(pr, p);
-        medium = mediumAcross(hit.prim, ng, d, medium);
+        if (kHasPassThrough) {
+            tr *= passThroughTransmittance(materials[pr.material], abs(dot(d, ng)), rng);
+        } else if (materials[pr.material].type != kBsdfForward) {
+            return vec3(0.0);
+        }
+        if (tr == vec3(0.0)) return tr;
+        if (kHasMedia) medium = mediumAcross(hit.prim, ng, d, medium);
         o = offsetRayOrigin(p, ng, d);
         if (tMax < kInfinity) tMax = max(tMax - hit.t, 0.0);
         startOnSurface = true;

@@ -60,7 +60,8 @@ vec3 sampleDirectLambert(vec3 p, vec3 ng, vec3 n, vec3 albedo, uint medium, inou
     // One shadow ray for every kind of light.
     vec3 o = offsetRayOrigin(p, ng, ls.wi);
     float tMax = ls.dist < kInfinity ? max(ls.dist - length(o - p), 0.0) : kInfinity;
-    if (kHasMedia) return albedo * kInvPi * value * shadowTransmittance(o, ls.wi, tMax, medium, true, rng, crossings);
+    if (kHasMedia || kHasPassThrough)
+        return albedo * kInvPi * value * shadowTransmittance(o, ls.wi, tMax, medium, true, rng, crossings);
     if (traceAny(o, ls.wi, tMax)) return vec3(0.0);
     return albedo * kInvPi * value;
 }
@@ -82,8 +83,8 @@ vec3 sampleDirectGlossy(vec3 p, vec3 ng, vec3 n, vec3 t, vec3 b, vec3 wi, Materi
     vec3 value = f * ls.weight * mis;
     vec3 o = offsetRayOrigin(p, ng, ls.wi);
     float tMax = ls.dist < kInfinity ? max(ls.dist - length(o - p), 0.0) : kInfinity;
-    if (kHasMedia) {
-        uint shadowMedium = mediumAcross(prim, ng, ls.wi, medium);
+    if (kHasMedia || kHasPassThrough) {
+        uint shadowMedium = kHasMedia ? mediumAcross(prim, ng, ls.wi, medium) : 0u;
         return value * shadowTransmittance(o, ls.wi, tMax, shadowMedium, true, rng, crossings);
     }
     if (traceAny(o, ls.wi, tMax)) return vec3(0.0);
@@ -228,7 +229,7 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     if (any(greaterThan(le, vec3(0.0)))) {
         float mis = 1.0;
         if (!s.specularPrev && kLightSampling) {
-            float dist = kHasMedia ? length(p - s.lastVertex) : hit.t;
+            float dist = (kHasMedia || kHasPassThrough) ? length(p - s.lastVertex) : hit.t;
             mis = powerHeuristic(s.pdfPrev, areaLightPdf(uint(pr.light), pr.area, dist, -dot(s.dir, ng)));
         }
         addContribution(s.result, v - 1u, s.throughput * le * mis, pmf, s.level);
@@ -248,6 +249,62 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     }
     bool front = dot(s.dir, ng) < 0.0;
     vec3 n = front ? ng : -ng;  // faces the incoming ray
+#ifdef TELESCOPE_GLOSSY
+    // Mixed, transparency and thin sheets, resolved here to one material or a straight pass:
+    // - mixed: component 0 with probability ratio, else component 1, with the mixed albedo as
+    //   weight. Every estimate at this vertex (next-event estimation, BSDF sampling, and the MIS
+    //   weights between them, which use the chosen component's pdf both here and when the sampled
+    //   ray finds a light) is then the component's own unbiased estimator, so the expectation is
+    //   ratio E[0] + (1 - ratio) E[1]: the integral of the mixture ratio f0 + (1 - ratio) f1.
+    //   (Tungsten samples the mixture as one BSDF; the expectation is the same, no recursion here.)
+    // - transparency: straight on with probability 1 - alpha (weight 1), else its base (weight 1);
+    //   Tungsten's handleSurface draws the same way.
+    // - thinsheet: straight on with probability mean(T) (weight T / mean(T)), else the specular
+    //   reflection (weight R / (1 - mean(T))): shared/bsdf.h thinSheetScatter.
+    // A straight pass is a bounce (Tungsten's loop counts every surface); it keeps the last
+    // scattering vertex and its pdf for MIS, like a forward boundary.
+    if ((kBsdfFamilies & (kFamilyMixed | kFamilyTransparency | kFamilyThinSheet)) != 0u) {
+        bool pass = false;
+        for (uint level = 0u; level < kMaxMaterialNesting; ++level) {
+            if ((kBsdfFamilies & kFamilyMixed) != 0u && m.type == kBsdfMixed) {
+                s.throughput *= m.albedo;
+                m = materials[mixedComponent(m, rngNext(rng))];
+                if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);  // the component's own textures
+            } else if ((kBsdfFamilies & kFamilyTransparency) != 0u && m.type == kBsdfTransparency) {
+                if (rngNext(rng) >= m.alpha) {
+                    pass = true;
+                    break;
+                }
+                m = materials[m.component0];
+                if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
+            } else {
+                break;
+            }
+        }
+        if (kHasMedia && m.type == kBsdfForward) pass = true;  // a forward boundary as a component
+        bool reflected = false;
+        if (!pass && (kBsdfFamilies & kFamilyThinSheet) != 0u && m.type == kBsdfThinSheet) {
+            vec3 weight;
+            reflected = thinSheetScatter(m, abs(dot(s.dir, ng)), rngNext(rng), weight);
+            s.throughput *= weight;
+            pass = !reflected;
+        }
+        if (pass) {
+            if (kHasMedia) {
+                s.medium = mediumAcross(hit.prim, ng, s.dir, s.medium);
+                s.fromSurface = true;
+                s.mediumScatters = 0u;
+            }
+            s.origin = offsetRayOrigin(p, ng, s.dir);
+            s.vertex = v + 1u;
+            return true;
+        }
+        if (reflected) {
+            s.dir = reflect(s.dir, n);
+            s.specularPrev = true;
+        }
+    }
+#endif
 
     if (m.type == kBsdfLambert) {
         if (!front && !kTwoSided) return false;
@@ -289,6 +346,8 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         s.throughput *= weight;
         s.pdfPrev = pdf;
         s.specularPrev = specular;
+    } else if ((kBsdfFamilies & kFamilyThinSheet) != 0u && m.type == kBsdfThinSheet) {
+        // reflected above (thinSheetScatter)
 #endif
     } else {
         return false;  // null: black and opaque
@@ -309,8 +368,8 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     if (kHasMedia) {
         s.medium = mediumAcross(hit.prim, ng, s.dir, s.medium);
         s.fromSurface = true;
-        s.lastVertex = p;
         s.mediumScatters = 0u;
     }
+    if (kHasMedia || kHasPassThrough) s.lastVertex = p;
     return true;
 }

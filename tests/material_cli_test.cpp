@@ -39,6 +39,25 @@ TEST_F(MaterialCli, PlanListsTheGlossyFamiliesOfTheScene) {
     EXPECT_EQ(readText(outFile).find(" on   rough"), std::string::npos) << readText(outFile);
 }
 
+// The thin materials' families: scenes/mixed.json has mixed (and its rough_conductor component),
+// no thinsheet or transparency.
+TEST_F(MaterialCli, PlanListsTheThinMaterialFamilies) {
+    const std::string outFile = out("plan-mixed.txt");
+    const int status = std::system(
+        (std::string(TELESCOPE_BINARY) + " plan " + sourcePath("scenes/mixed.json") + " > " + outFile).c_str());
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    const std::string text = readText(outFile);
+    EXPECT_TRUE(std::regex_search(text, std::regex("\n  mixed +on +mixed materials present"))) << text;
+    EXPECT_TRUE(std::regex_search(text, std::regex("\n  rough_conductor +on"))) << text;
+    for (const char* family : {"thinsheet", "transparency"})
+        EXPECT_TRUE(std::regex_search(text, std::regex(std::string("\n  ") + family + " +off +no " + family))) << family << "\n" << text;
+    const int sheet = std::system(
+        (std::string(TELESCOPE_BINARY) + " plan " + sourcePath("scenes/thinsheet.json") + " > " + outFile).c_str());
+    ASSERT_TRUE(WIFEXITED(sheet) && WEXITSTATUS(sheet) == 0);
+    EXPECT_TRUE(std::regex_search(readText(outFile), std::regex("\n  thinsheet +on"))) << readText(outFile);
+    EXPECT_TRUE(std::regex_search(readText(outFile), std::regex("\n  mixed +off"))) << readText(outFile);
+}
+
 TEST_F(MaterialCli, PhotonMappingRejectsAGlossyBsdfByItsKey) {
     const std::string exr = out("photons.exr");
     const CommandResult r = run("render " + sourcePath("scenes/point-plane-photon.json") + " -o " + exr +

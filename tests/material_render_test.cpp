@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cmath>
+#include <functional>
 
 #include "region_stats.h"
 #include "render/gpu_scene.h"
@@ -267,4 +268,143 @@ TEST_F(GlossyRender, CheckerRoughnessPlateMatchesItsCells) {
     std::printf("checker roughness: max |Z| %.2f; control with the cells swapped: %zu of %zu tests fail\n", z.maxAbsZ,
                 ctl.failing, ctl.tests);
     EXPECT_GT(ctl.failing, 0u) << "the test cannot see the roughness cells swapped";
+}
+
+// ---- Thin sheets, transparency and mixed materials (shared/bsdf.h, shaders/path_tracer.glsl) ----
+namespace {
+
+// Block means (8x8) and the image mean of a closed form given per pixel by its view direction.
+std::pair<std::vector<RegionMean>, RegionMean> regionsOf(const Scene& s,
+                                                         const std::function<glm::dvec3(glm::vec3 wi)>& value) {
+    const std::vector<glm::vec3> wi = pixelViewDirections(s);
+    const uint32_t w = s.camera.width, h = s.camera.height, b = 8;
+    std::vector<RegionMean> blocks((w / b) * (h / b));
+    RegionMean image;
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x) {
+            const glm::dvec3 v = value(wi[y * w + x]);
+            blocks[(y / b) * (w / b) + x / b].mean += v / double(b * b);
+            image.mean += v / double(w * h);
+        }
+    return {blocks, image};
+}
+
+// `scene` with overrides against the closed form `answer` (computed from the scene as loaded), and
+// the control: the same scene with wrongOverrides against the same answer, which must be rejected.
+void checkClosedForm(const std::string& scene, const std::vector<SceneOverride>& overrides,
+                     const std::vector<SceneOverride>& wrongOverrides, uint32_t seed,
+                     const std::function<std::function<glm::dvec3(glm::vec3)>(const Scene&)>& answer) {
+    const Scene s = loadTestScene(scene, overrides);
+    const auto [blocks, image] = regionsOf(s, answer(s));
+    const Film film = renderFilm(s, 256, seed);
+    EXPECT_EQ(film.nonFiniteSamples(), 0u);
+    const ZSummary z = compareBlocksAndImage(film, blocks, image, 8);
+    EXPECT_EQ(z.failing, 0u) << scene << ": " << z.worst << " (threshold " << z.threshold << ")";
+    const RegionMean got = imageMean(film);
+    std::printf("%s: image mean %.5f %.5f %.5f, expected %.5f %.5f %.5f, max |Z| %.2f\n", scene.c_str(), got.mean.x,
+                got.mean.y, got.mean.z, image.mean.x, image.mean.y, image.mean.z, z.maxAbsZ);
+    std::vector<SceneOverride> wrong = overrides;
+    wrong.insert(wrong.end(), wrongOverrides.begin(), wrongOverrides.end());
+    const ZSummary c = compareBlocksAndImage(renderFilm(loadTestScene(scene, wrong), 256, seed + 1), blocks, image, 8);
+    std::printf("control %s %s=%s: %zu of %zu tests fail, worst %s\n", scene.c_str(), wrongOverrides[0].key.c_str(),
+                wrongOverrides[0].value.c_str(), c.failing, c.tests, c.worst.c_str());
+    EXPECT_GT(c.failing, 0u) << scene << ": the test cannot see " << wrongOverrides[0].key << " = " << wrongOverrides[0].value;
+}
+
+// Cosine-weighted hemispherical mean 2 int_0^1 g(mu) mu dmu (midpoint rule).
+glm::dvec3 hemisphericalMean(const std::function<glm::dvec3(float mu)>& g) {
+    const int n = 20000;
+    glm::dvec3 sum(0.0);
+    for (int i = 0; i < n; ++i) {
+        const double mu = (i + 0.5) / n;
+        sum += g(float(mu)) * (2.0 * mu / n);
+    }
+    return sum;
+}
+
+}  // namespace
+
+// scenes/thinsheet.json: a thin sheet at y = 0 over a Lambert ground of albedo rho at y = -1, under
+// a sky of radiance 1 (both plates 400 x 400, wide enough to be infinite here). The sheet reflects
+// R(mu) of the sky and passes T(mu) of what the ground sends up; the ground is uniformly lit and
+// Lambertian, so its radiance is L = rho (Tbar + Rbar L), Tbar and Rbar the cosine-weighted means
+// over the hemisphere: a pixel at view cosine mu is R(mu) + T(mu) rho Tbar / (1 - rho Rbar). Light
+// reaches the ground through the sheet by next-event estimation, whose shadow rays the sheet
+// attenuates by T (Tungsten's forward lobe), and by BSDF sampling through the sheet, with MIS: a
+// blocked or unattenuated shadow ray fails this test. Weights are bounded (at most 1 / mean(T)),
+// so the variance is finite. Control: ior 1.8 against the same answer.
+TEST_F(GlossyRender, ThinSheetOverAGroundMatchesItsClosedForm) {
+    auto answer = [](const Scene& s) {
+        const shader::MaterialGpu sheet = telescope::gpuMaterial(s.materials.at(s.geometry.at(0).material));
+        const glm::dvec3 rho(s.materials.at(s.geometry.at(1).material).albedo);
+        auto rt = [sheet](float mu, bool reflect) {
+            glm::vec3 T;
+            const glm::vec3 R = shader::thinSheetReflectance(sheet, mu, T);
+            return glm::dvec3(reflect ? R : T);
+        };
+        const glm::dvec3 rBar = hemisphericalMean([&](float mu) { return rt(mu, true); });
+        const glm::dvec3 tBar = hemisphericalMean([&](float mu) { return rt(mu, false); });
+        const glm::dvec3 ground = rho * tBar / (1.0 - rho * rBar);
+        return std::function<glm::dvec3(glm::vec3)>([=](glm::vec3 wi) { return rt(wi.z, true) + rt(wi.z, false) * ground; });
+    };
+    checkClosedForm("scenes/thinsheet.json", {}, {{"bsdfs[0].ior", "1.8"}}, 41, answer);
+    // Thin-film interference: coloured R and T in the same closed form.
+    checkClosedForm("scenes/thinsheet.json", {{"bsdfs[0].enable_interference", "true"}}, {{"bsdfs[0].thickness", "0.6"}}, 43,
+                    answer);
+}
+
+// A non-absorbing thin sheet over nothing but the sky (the ground shrunk to a speck no pixel's
+// ray meets) is a white furnace: R + T = 1, and every
+// weight is 1, so every pixel is exactly 1.
+TEST_F(GlossyRender, NonAbsorbingThinSheetIsAWhiteFurnace) {
+    const Scene s = loadTestScene("scenes/thinsheet.json", {{"bsdfs[0].sigma_a", "0"}, {"primitives[1].transform.scale", "[0.001,1,0.001]"}});
+    const Film film = renderFilm(s, 16, 45);
+    for (uint32_t i = 0; i < s.camera.width * s.camera.height; ++i) {
+        const glm::dvec3 v = film.mean(0, i);
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(v[c], 1.0, 1e-5) << "pixel " << i;
+    }
+}
+
+// scenes/transparency.json: a transparency sheet (opacity alpha over a Lambert base of albedo a)
+// over a Lambert ground (rho) under a sky of radiance 1. Everything is uniform and diffuse or
+// straight-through, so the sheet's radiance is the same everywhere: with s = alpha a and t =
+// 1 - alpha, the ground sends up L = rho (t + s L), and a pixel is s + t^2 rho / (1 - rho s) (the
+// base is two-sided). Shadow rays from the ground pass the sheet with weight 1 - alpha. Weights
+// are at most 1. Control: alpha 0.5.
+TEST_F(GlossyRender, TransparencyOverAGroundMatchesItsClosedForm) {
+    auto answer = [](const Scene& s) {
+        const Material& leaf = s.materials.at(s.geometry.at(0).material);
+        const glm::dvec3 sRef = double(leaf.alpha) * glm::dvec3(s.materials.at(leaf.component[0]).albedo);
+        const glm::dvec3 rho(s.materials.at(s.geometry.at(1).material).albedo);
+        const double t = 1.0 - leaf.alpha;
+        const glm::dvec3 v = sRef + t * t * rho / (1.0 - rho * sRef);
+        return std::function<glm::dvec3(glm::vec3)>([=](glm::vec3) { return v; });
+    };
+    checkClosedForm("scenes/transparency.json", {}, {{"bsdfs[0].alpha", "0.5"}}, 47, answer);
+}
+
+// scenes/mixed.json: a plate of ratio x rough copper + (1 - ratio) x Lambert under the sky: a pixel
+// is ratio E_copper(mu) + (1 - ratio) albedo, E_copper the copper's directional albedo by
+// quadrature. Also with a mirror (a Dirac component) for the copper: ratio + (1 - ratio) albedo.
+// Control: ratio 0.6 against the same answer.
+TEST_F(GlossyRender, MixedPlateMatchesTheMixtureOfItsComponents) {
+    checkClosedForm("scenes/mixed.json", {}, {{"bsdfs[1].ratio", "0.6"}}, 51, [](const Scene& s) {
+        const Material& mix = s.materials.at(s.geometry.at(0).material);
+        const shader::MaterialGpu copper = telescope::gpuMaterial(s.materials.at(mix.component[0]));
+        const glm::dvec3 lambert(s.materials.at(mix.component[1]).albedo);
+        double maxTheta = 0.0;
+        for (const glm::vec3& w : pixelViewDirections(s)) maxTheta = std::max(maxTheta, std::acos(double(std::clamp(w.z, -1.0f, 1.0f))));
+        const std::array<AlbedoTable, 3> e = albedoTables(copper, maxTheta + 0.01);
+        const double r = mix.ratio;
+        return std::function<glm::dvec3(glm::vec3)>([=](glm::vec3 wi) {
+            const double th = std::acos(double(std::clamp(wi.z, -1.0f, 1.0f)));
+            return r * glm::dvec3(e[0](th), e[1](th), e[2](th)) + (1.0 - r) * lambert;
+        });
+    });
+    checkClosedForm("scenes/mixed.json", {{"bsdfs[0].type", "mirror"}}, {{"bsdfs[1].ratio", "0.6"}}, 53, [](const Scene& s) {
+        const Material& mix = s.materials.at(s.geometry.at(0).material);
+        EXPECT_EQ(s.materials.at(mix.component[0]).type, BsdfType::Mirror);
+        const glm::dvec3 v = double(mix.ratio) + (1.0 - mix.ratio) * glm::dvec3(s.materials.at(mix.component[1]).albedo);
+        return std::function<glm::dvec3(glm::vec3)>([=](glm::vec3) { return v; });
+    });
 }

@@ -33,6 +33,9 @@ FN uint bsdfFamily(uint type) {
     if (type == kBsdfRoughPlastic) return kFamilyRoughPlastic;
     if (type == kBsdfOrenNayar) return kFamilyOrenNayar;
     if (type == kBsdfRoughDielectric) return kFamilyRoughDielectric;
+    if (type == kBsdfThinSheet) return kFamilyThinSheet;
+    if (type == kBsdfMixed) return kFamilyMixed;
+    if (type == kBsdfTransparency) return kFamilyTransparency;
     return 0u;
 }
 
@@ -73,6 +76,84 @@ FN vec3 scatterSpecular(MaterialGpu m, bool front, vec3 n, INOUT(vec3) dir, INOU
     dir = normalize(dir / eta + n * (cosI / eta - cosT));
     return m.albedo;
 }
+
+// ---- Thin sheet (Tungsten's ThinSheetBsdf and Fresnel::thinFilmReflectance*): a dielectric slab
+// of index ior in vacuum, thin enough that the reflected and transmitted rays leave where they
+// entered. Reflection is specular, transmission goes straight on (a forward lobe). ----
+
+// Reflectance of the slab from incoherent multiple reflections: with r the single-interface
+// reflectance of one polarisation, the slab reflects r + (1 - r)^2 r (1 + r^2 + r^4 + ...) =
+// 2 r / (1 + r); the result averages s and p. cosT is the cosine inside the slab (0 when the
+// light cannot enter, for ior < 1 past the critical angle; the slab then reflects all).
+FN float thinSheetSlabReflectance(float ior, float cosI, OUT(float) cosT) {
+    float sin2T = (1.0f - cosI * cosI) / (ior * ior);
+    if (sin2T > 1.0f) {
+        cosT = 0.0f;
+        return 1.0f;
+    }
+    cosT = sqrt(max(0.0f, 1.0f - sin2T));
+    float rs = (cosI - ior * cosT) / (cosI + ior * cosT);
+    float rp = (ior * cosI - cosT) / (ior * cosI + cosT);
+    rs *= rs;
+    rp *= rp;
+    return 0.5f * (2.0f * rs / (1.0f + rs) + 2.0f * rp / (1.0f + rp));
+}
+
+// Reflectance of a film `nm` nanometres thick with thin-film interference at 650, 510 and 475 nm
+// (the R, G and B wavelengths Tungsten uses): the coherent sum of the multiply reflected waves,
+// per polarisation 1 - t^2 / (1 + r^2 - 2 r cos phi) with t = 1 - r the single-interface
+// transmittance and phi = 4 pi ior nm cos(theta_t) / lambda the phase of one round trip. Averaged
+// over phi it is the incoherent slab above.
+FN vec3 thinFilmInterferenceReflectance(float ior, float cosI, float nm, OUT(float) cosT) {
+    float sin2T = (1.0f - cosI * cosI) / (ior * ior);
+    if (sin2T > 1.0f) {
+        cosT = 0.0f;
+        return vec3(1.0f);
+    }
+    cosT = sqrt(max(0.0f, 1.0f - sin2T));
+    float rs = (cosI - ior * cosT) / (cosI + ior * cosT);
+    float rp = (ior * cosI - cosT) / (ior * cosI + cosT);
+    rs *= rs;
+    rp *= rp;
+    vec3 phi = (4.0f * kPi * ior * nm * cosT) / vec3(650.0f, 510.0f, 475.0f);
+    vec3 cosPhi = vec3(cos(phi.x), cos(phi.y), cos(phi.z));
+    vec3 ts = (1.0f - rs) * (1.0f - rs) / ((1.0f + rs * rs) - 2.0f * rs * cosPhi);
+    vec3 tp = (1.0f - rp) * (1.0f - rp) / ((1.0f + rp * rp) - 2.0f * rp * cosPhi);
+    return vec3(1.0f) - 0.5f * (ts + tp);
+}
+
+// Reflectance R and forward transmittance T of a thin sheet (MaterialGpu: ior, roughness = the
+// thickness, k = tau = thickness sigma_a, kMaterialInterference) for |cos| cosI of the incoming
+// ray. As in Tungsten, T = (1 - R) exp(-2 tau / cos theta_t) and R ignores the absorption; the
+// film of an interfering sheet is 500 nm per unit of thickness.
+FN vec3 thinSheetReflectance(MaterialGpu m, float cosI, OUT(vec3) T) {
+    float cosT;
+    vec3 R;
+    if ((m.flags & kMaterialInterference) != 0u) R = thinFilmInterferenceReflectance(m.ior, cosI, m.roughness * 500.0f, cosT);
+    else R = vec3(thinSheetSlabReflectance(m.ior, cosI, cosT));
+    T = vec3(1.0f) - R;
+    if (m.k != vec3(0.0f) && cosT > 0.0f) T *= exp(-2.0f * m.k / cosT);
+    return R;
+}
+
+// Tungsten's scattering at a thin sheet: straight on with probability p = mean(T), weight T / p;
+// else specular reflection with weight R / (1 - p). Returns true for reflection.
+FN bool thinSheetScatter(MaterialGpu m, float cosI, float u, OUT(vec3) weight) {
+    vec3 T;
+    vec3 R = thinSheetReflectance(m, cosI, T);
+    float p = (T.x + T.y + T.z) / 3.0f;
+    bool plain = m.k == vec3(0.0f) && (m.flags & kMaterialInterference) == 0u;  // T = 1 - R, grey
+    if (u < p) {
+        weight = plain ? vec3(1.0f) : T / p;
+        return false;
+    }
+    weight = plain ? vec3(1.0f) : R / (1.0f - p);
+    return true;
+}
+
+// ---- Mixed: the component an event at a mixed material uses, component 0 with probability
+// ratio (Tungsten's nextBoolean(ratio) picks bsdf0); u uniform in [0, 1). ----
+FN uint mixedComponent(MaterialGpu m, float u) { return u < m.ratio ? m.component0 : m.component1; }
 
 // ---- Glossy materials in the local frame (z = the shading normal facing the viewer, wi towards
 // the viewer; for rough_dielectric z is the outward normal and wi.z < 0 inside): eval is

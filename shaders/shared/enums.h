@@ -26,6 +26,9 @@ CONST uint kBsdfPlastic = 7u;         // smooth coat over a diffuse substrate (s
 CONST uint kBsdfRoughPlastic = 8u;    // microfacet coat over a diffuse substrate
 CONST uint kBsdfOrenNayar = 9u;       // rough diffuse
 CONST uint kBsdfRoughDielectric = 10u;  // microfacet dielectric, reflection and refraction
+CONST uint kBsdfThinSheet = 11u;      // thin dielectric slab: specular reflection and straight-through transmission
+CONST uint kBsdfMixed = 12u;          // two materials in proportion ratio : 1 - ratio (components 0 and 1)
+CONST uint kBsdfTransparency = 13u;   // a base material with opacity alpha; 1 - alpha passes straight through
 
 // Families of non-delta materials a scene may lack (bits of the kSpecBsdfFamilies specialisation
 // constant): the path tracer folds out every family the scene does not use.
@@ -34,6 +37,14 @@ CONST uint kFamilyPlastic = 2u;
 CONST uint kFamilyRoughPlastic = 4u;
 CONST uint kFamilyOrenNayar = 8u;
 CONST uint kFamilyRoughDielectric = 16u;
+CONST uint kFamilyThinSheet = 32u;     // (these three are delta or composite materials: the path
+CONST uint kFamilyMixed = 64u;         // tracer resolves them at the hit, shaders/path_tracer.glsl,
+CONST uint kFamilyTransparency = 128u; // and shadow rays pass thin sheets and transparency)
+// Materials through which rays pass straight on (shadow rays too): thinsheet and transparency.
+CONST uint kFamilyPassThrough = kFamilyThinSheet | kFamilyTransparency;
+// Deepest nesting of mixed and transparency materials (a component that is itself one counts one
+// level); the scene reader rejects deeper nesting, the shaders' resolution loop stops there.
+CONST uint kMaxMaterialNesting = 8u;
 CONST uint kFamilyAll = 0xffffffffu;
 
 // Microfacet distributions (Tungsten's "distribution": "beckmann", "phong", "ggx")

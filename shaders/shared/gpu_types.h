@@ -32,8 +32,12 @@ struct MaterialGpu {
     vec3 eta; float diffuseFresnel;    // conductors: complex index eta + i k; plastics: Fdr,
     vec3 k; float substrateWeight;     // k = tau = thickness sigma_a, mean(albedo) exp(-2 mean(tau)) (layered.h)
     uint albedoTexture; uint roughnessTexture; uint texturePad0; uint texturePad1;  // kNoTexture or a TextureGpu index
+    // mixed: components 0 and 1 (material indices), ratio = the weight of component 0; transparency:
+    // component0 = the base, alpha = its opacity (thinsheet: roughness = thickness, k = thickness sigma_a)
+    uint component0; uint component1; float ratio; float alpha;
 };
 CONST uint kMaterialRefraction = 1u;  // flags: dielectric transmits
+CONST uint kMaterialInterference = 2u;  // flags: thinsheet with thin-film interference
 
 // ---- Textures (type: kTexture*; shared/texture.h) ----
 // Constant: value = on. Checker: on, off, res = (res_u, res_v). Bitmap: scale = on, res = (width,
@@ -88,7 +92,7 @@ static_assert(sizeof(telescope::shader::MediumGpu) == 240);
 static_assert(sizeof(telescope::shader::TrModel) == 48);
 static_assert(sizeof(telescope::shader::Prim) == 64);
 static_assert(sizeof(telescope::shader::BvhNode) == 32);
-static_assert(sizeof(telescope::shader::MaterialGpu) == 80);
+static_assert(sizeof(telescope::shader::MaterialGpu) == 96);
 static_assert(sizeof(telescope::shader::TextureGpu) == 48);
 static_assert(sizeof(telescope::shader::LightGpu) == 48);
 #endif

@@ -131,6 +131,15 @@ shader::MaterialGpu gpuMaterial(const Material& m, double diffuseFresnel) {
     g.k = m.k;
     g.albedoTexture = m.albedoTexture >= 0 ? uint32_t(m.albedoTexture) : shader::kNoTexture;
     g.roughnessTexture = m.roughnessTexture >= 0 ? uint32_t(m.roughnessTexture) : shader::kNoTexture;
+    g.component0 = m.component[0];
+    g.component1 = m.component[1];
+    g.ratio = m.ratio;
+    g.alpha = m.alpha;
+    if (m.type == BsdfType::ThinSheet) {
+        g.roughness = m.thickness;
+        g.k = m.thickness * m.sigmaA;  // tau
+        if (m.enableInterference) g.flags |= shader::kMaterialInterference;
+    }
     if (m.type == BsdfType::Plastic || m.type == BsdfType::RoughPlastic) {
         g.diffuseFresnel = float(diffuseFresnel < 0.0 ? plasticDiffuseFresnel(m.ior) : diffuseFresnel);
         g.k = m.thickness * m.sigmaA;  // tau

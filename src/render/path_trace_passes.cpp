@@ -98,7 +98,12 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
           std::tuple{shader::kFamilyRoughPlastic, "rough_plastic", "rough_plastic materials present", "no rough_plastic materials"},
           std::tuple{shader::kFamilyOrenNayar, "oren_nayar", "oren_nayar materials present", "no oren_nayar materials"},
           std::tuple{shader::kFamilyRoughDielectric, "rough_dielectric", "rough_dielectric materials present",
-                     "no rough_dielectric materials"}})
+                     "no rough_dielectric materials"},
+          std::tuple{shader::kFamilyThinSheet, "thinsheet", "thinsheet materials present (shadow rays pass them)",
+                     "no thinsheet materials"},
+          std::tuple{shader::kFamilyMixed, "mixed", "mixed materials present", "no mixed materials"},
+          std::tuple{shader::kFamilyTransparency, "transparency", "transparency materials present (shadow rays pass them)",
+                     "no transparency materials"}})
         feature(name, (f.bsdfFamilies & bit) != 0u, yes, no);
     feature("textures", f.textures, "textured material parameters (uvs computed at their hits)",
             "no textured materials");

@@ -21,7 +21,8 @@ enum class BsdfType : uint32_t {
     Lambert = shader::kBsdfLambert, Mirror = shader::kBsdfMirror, Dielectric = shader::kBsdfDielectric,
     Null = shader::kBsdfNull, Forward = shader::kBsdfForward, Conductor = shader::kBsdfConductor,
     RoughConductor = shader::kBsdfRoughConductor, Plastic = shader::kBsdfPlastic, RoughPlastic = shader::kBsdfRoughPlastic,
-    OrenNayar = shader::kBsdfOrenNayar, RoughDielectric = shader::kBsdfRoughDielectric
+    OrenNayar = shader::kBsdfOrenNayar, RoughDielectric = shader::kBsdfRoughDielectric,
+    ThinSheet = shader::kBsdfThinSheet, Mixed = shader::kBsdfMixed, Transparency = shader::kBsdfTransparency
 };
 
 // A texture on a material parameter (Tungsten's constant, checker and bitmap; shared/texture.h).
@@ -60,6 +61,13 @@ struct Material {
     // Textured parameters: index into Scene::textures, -1 = the constant above.
     int32_t albedoTexture = -1;
     int32_t roughnessTexture = -1;
+    // thinsheet (thickness, sigmaA above; Tungsten's thickness default is 0.5)
+    bool enableInterference = false;
+    // mixed: bsdf0 and bsdf1, ratio = the weight of bsdf0; transparency: component[0] = base,
+    // alpha = opacity. Indices into Scene::materials once the scene is loaded.
+    uint32_t component[2] = {0, 0};
+    float ratio = 0.5f;
+    float alpha = 1.0f;
 };
 
 // Whether the photon tracer and gather implement a material (the others are path tracing's).

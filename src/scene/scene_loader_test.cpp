@@ -404,6 +404,51 @@ TEST(SceneLoader, PlasticsOrenNayarRoughDielectric) {
     expectVec(rd.albedo, glm::vec3(0.5f));
 }
 
+TEST(SceneLoader, ThinSheetMixedTransparency) {
+    const Scene s = load(R"({"bsdfs": [{"name": "sheet", "type": "thinsheet"},
+                                        {"name": "film", "type": "thinsheet", "ior": 1.33, "thickness": 0.8,
+                                         "sigma_a": [0.1, 0.2, 0.3], "enable_interference": true},
+                                        {"name": "unused", "type": "rough_conductor"},
+                                        {"name": "mix", "type": "mixed", "bsdf0": "sheet",
+                                         "bsdf1": {"type": "lambert", "albedo": 0.25}, "ratio": 0.3, "albedo": 0.5},
+                                        {"name": "leaf", "type": "transparency", "base": "mix", "alpha": 0.6},
+                                        {"name": "default", "type": "transparency"}],
+        "primitives": [{"type": "quad", "bsdf": "leaf"}, {"type": "quad", "bsdf": "sheet"}, {"type": "quad", "bsdf": "film"},
+                       {"type": "quad", "bsdf": "default"}]})");
+    // leaf, mix, sheet, the inline lambert, film, default, its white lambert base; no unused conductor.
+    ASSERT_EQ(s.materials.size(), 7u);
+    const Material& leaf = s.materials[s.geometry[0].material];
+    EXPECT_EQ(leaf.type, BsdfType::Transparency);
+    EXPECT_FLOAT_EQ(leaf.alpha, 0.6f);
+    const Material& mix = s.materials[leaf.component[0]];
+    EXPECT_EQ(mix.type, BsdfType::Mixed);
+    EXPECT_FLOAT_EQ(mix.ratio, 0.3f);
+    expectVec(mix.albedo, glm::vec3(0.5f));
+    // The named component is the same material the second quad uses.
+    EXPECT_EQ(mix.component[0], s.geometry[1].material);
+    const Material& sheet = s.materials[mix.component[0]];
+    EXPECT_EQ(sheet.type, BsdfType::ThinSheet);
+    // Tungsten's defaults: ior 1.5, thickness 0.5, no absorption, no interference.
+    EXPECT_FLOAT_EQ(sheet.ior, 1.5f);
+    EXPECT_FLOAT_EQ(sheet.thickness, 0.5f);
+    expectVec(sheet.sigmaA, glm::vec3(0.0f));
+    EXPECT_FALSE(sheet.enableInterference);
+    const Material& inlined = s.materials[mix.component[1]];
+    EXPECT_EQ(inlined.type, BsdfType::Lambert);
+    expectVec(inlined.albedo, glm::vec3(0.25f));
+    const Material& film = s.materials[s.geometry[2].material];
+    EXPECT_FLOAT_EQ(film.ior, 1.33f);
+    EXPECT_FLOAT_EQ(film.thickness, 0.8f);
+    expectVec(film.sigmaA, {0.1f, 0.2f, 0.3f});
+    EXPECT_TRUE(film.enableInterference);
+    // Tungsten's transparency defaults: alpha 1 over a white lambert.
+    const Material& def = s.materials[s.geometry[3].material];
+    EXPECT_FLOAT_EQ(def.alpha, 1.0f);
+    EXPECT_EQ(s.materials[def.component[0]].type, BsdfType::Lambert);
+    expectVec(s.materials[def.component[0]].albedo, glm::vec3(1.0f));
+    for (const Material& m : s.materials) EXPECT_NE(m.type, BsdfType::RoughConductor);
+}
+
 TEST(SceneLoader, UnknownKeysAreIgnoredNotErrors) {
     const Scene s = load(R"({"primitives": [], "version": 2, "camera": {"vignette": 1}})");
     EXPECT_TRUE(hasIgnored(s, "version"));
@@ -647,6 +692,23 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"OrenNayarRoughnessCheckerFractionalRes", R"({"bsdfs": [{"type": "oren_nayar", "roughness": {"type": "checker", "res_v": 2.5}}]})", "", "bsdfs[0].roughness.res_v", "expected an integer"},
         BadInput{"PlasticWithPhotons", R"({"primitives": [{"type": "quad", "bsdf": {"type": "plastic"}}], "integrator": {"type": "progressive_photon_map", "gather_radius": 0.1}})", "", "primitives[0].bsdf.type", "photon mapping does not implement"},
         BadInput{"RoughConductorWithPhotons", R"({"bsdfs": [{"name": "cu", "type": "rough_conductor"}], "primitives": [{"type": "quad", "bsdf": "cu"}], "integrator": {"type": "photon_map", "gather_radius": 0.1}})", "", "bsdfs[0].type", "photon mapping does not implement"},
+        BadInput{"MixedTexturedRatio", R"({"bsdfs": [{"name": "a", "type": "lambert"}, {"type": "mixed", "bsdf0": "a", "bsdf1": "a", "ratio": "r.png"}]})", "", "bsdfs[1].ratio", "a textured ratio is not supported"},
+        BadInput{"MixedRatioAboveOne", R"({"bsdfs": [{"name": "a", "type": "lambert"}, {"type": "mixed", "bsdf0": "a", "bsdf1": "a", "ratio": 1.5}]})", "", "bsdfs[1].ratio", "must be in [0, 1]"},
+        BadInput{"MixedWithoutBsdf1", R"({"bsdfs": [{"name": "a", "type": "lambert"}, {"type": "mixed", "bsdf0": "a"}]})", "", "bsdfs[1].bsdf1", "needs"},
+        BadInput{"MixedComponentDefinedLater", R"({"bsdfs": [{"name": "m", "type": "mixed", "bsdf0": "b", "bsdf1": "b"}, {"name": "b", "type": "lambert"}]})", "", "bsdfs[0].bsdf0", "unknown bsdf 'b'"},
+        BadInput{"MixedOfItself", R"({"bsdfs": [{"name": "m", "type": "mixed", "bsdf0": "m", "bsdf1": {"type": "lambert"}}]})", "", "bsdfs[0].bsdf0", "unknown bsdf 'm'"},
+        BadInput{"MixedInlineComponentError", R"({"bsdfs": [{"type": "mixed", "bsdf0": {"type": "lambert"}, "bsdf1": {"type": "velvet"}}]})", "", "bsdfs[0].bsdf1.type", "unknown bsdf type 'velvet'"},
+        BadInput{"TransparencyTexturedAlpha", R"({"bsdfs": [{"type": "transparency", "alpha": {"type": "bitmap", "file": "leaf.png"}}]})", "", "bsdfs[0].alpha", "a textured alpha is not supported"},
+        BadInput{"TransparencyNegativeAlpha", R"({"bsdfs": [{"type": "transparency", "alpha": -0.1}]})", "", "bsdfs[0].alpha", "must be in [0, 1]"},
+        BadInput{"ThinSheetNegativeSigmaA", R"({"bsdfs": [{"type": "thinsheet", "sigma_a": [0, -1, 0]}]})", "", "bsdfs[0].sigma_a", "non-negative"},
+        BadInput{"ThinSheetTexturedThickness", R"({"bsdfs": [{"type": "thinsheet", "thickness": "t.png"}]})", "", "bsdfs[0].thickness", "textured thickness"},
+        BadInput{"NestedTooDeep", withPrimitive(R"({"type": "quad", "bsdf": )" + [] {
+            std::string b = R"({"type": "lambert"})";
+            for (int i = 0; i < 9; ++i) b = R"({"type": "transparency", "alpha": 0.5, "base": )" + b + "}";
+            return b;
+        }() + "}"), "", "primitives[0].bsdf", "nest at most 8 deep"},
+        BadInput{"MixedWithPhotons", R"({"primitives": [{"type": "quad", "bsdf": {"type": "mixed", "bsdf0": {"type": "lambert"}, "bsdf1": {"type": "mirror"}}}], "integrator": {"type": "photon_map", "gather_radius": 0.1}})", "", "primitives[0].bsdf.type", "photon mapping does not implement"},
+        BadInput{"ThinSheetWithPhotons", R"({"primitives": [{"type": "quad", "bsdf": {"type": "thinsheet"}}], "integrator": {"type": "photon_map", "gather_radius": 0.1}})", "", "primitives[0].bsdf.type", "photon mapping does not implement"},
         BadInput{"UnknownBsdfType", R"({"bsdfs": [{"type": "velvet"}]})", "", "bsdfs[0].type", "unknown bsdf type 'velvet'"},
         BadInput{"UnknownBsdfName", withPrimitive(kQuad + "," + R"({"type": "quad", "bsdf": "black"})"), "", "primitives[1].bsdf", "unknown bsdf 'black'"},
         BadInput{"MissingBsdf", withPrimitive(R"({"type": "sphere"})"), "", "primitives[0]", "missing 'bsdf'"},

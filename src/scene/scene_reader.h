@@ -90,6 +90,12 @@ private:
     void readBsdfs(const json& list);
     Material readBsdf(const json& v, const std::string& key);
     uint32_t material(const json& ref, const std::string& key);
+    uint32_t componentRef(const json& ref, const std::string& key);
+    uint32_t namedMaterial(size_t named);
+    uint32_t addMaterial(Material m);
+    uint32_t nestingOf(uint32_t index) const;
+    void readComponents(const json& v, const std::string& key, Material& m, std::vector<std::string_view>& read);
+    float unitScalar(const json& v, const std::string& key, const char* what) const;
     void readConductor(const json& v, const std::string& key, Material& m);
     void readMicrofacet(const json& v, const std::string& key, Material& m, std::vector<std::string_view>& read);
     void readIor(const json& v, const std::string& key, Material& m);
@@ -131,6 +137,15 @@ private:
     std::vector<Material> namedBsdfs_;
     std::map<std::string, size_t> bsdfByName_;                 // first bsdf of each name
     std::vector<std::optional<uint32_t>> namedBsdfMaterial_;   // index in scene_.materials once used
+    // Components of mixed and transparency bsdfs while reading: Material::component holds an index
+    // here (a named bsdf, or an inline one in inlineComponents_), resolved to scene_.materials
+    // indices when the material is first used, so unused bsdfs add no materials.
+    struct ComponentRef {
+        bool named;
+        size_t index;
+    };
+    std::vector<ComponentRef> componentRefs_;
+    std::vector<Material> inlineComponents_;
     std::map<std::string, int32_t> mediumByName_;
 };
 
