@@ -96,7 +96,11 @@ CONST uint kBindingPrimMedia = 6u;  // uint per prim slot: media on its two side
 // always have a full range.
 CONST uint kBindingBvhUniform = 7u;
 CONST uint kBindingPrimsUniform = 8u;
-CONST uint kPathTraceBindingCount = 9u;
+// Binding 9 belongs to the textures (another branch); path_trace binds a dummy there until it lands.
+// The environment image of an infinite_sphere and its sampling tables (shared/environment_map.h;
+// one dummy float without): every path_trace pipeline binds it, only kSpecEnvironmentMap reads it.
+CONST uint kBindingEnvironment = 10u;
+CONST uint kPathTraceBindingCount = 11u;
 CONST uint kUniformSceneBytes = 65536u;  // maxUniformBufferRange on lavapipe; the Vulkan minimum is 16384
 CONST uint kMaxUniformNodes = 2048u;     // kUniformSceneBytes / sizeof(BvhNode)
 CONST uint kMaxUniformPrims = 1024u;     // kUniformSceneBytes / sizeof(Prim)
@@ -126,6 +130,7 @@ CONST uint kSpecLevelSchedule = 17u;     // kLevelSchedule*: how per-sample leve
 CONST uint kSpecTestPmfWeight = 18u;     // test-only: scales every 1 / p(j) (debias.test_pmf_weight)
 CONST uint kSpecSceneInUniforms = 19u;   // BVH nodes and primitives read from the uniform bindings
 CONST uint kSpecBsdfFamilies = 21u;     // kFamily* bits: the non-delta material families present
+CONST uint kSpecEnvironmentMap = 23u;    // the environment light (kSpecEnvironmentLight) has an image
 
 // Participating media, ids 32..47 (shaders/medium.glsl).
 CONST uint kSpecHasMedia = 32u;          // media or forward (index-matched) boundaries present

@@ -19,6 +19,7 @@ struct SceneFeatures {
     bool pointLights = false;
     bool environment = false;
     uint32_t environmentLight = 0xffffffffu;  // index in the light table
+    bool environmentMap = false;              // the environment has an image (kSpecEnvironmentMap)
     uint32_t capLight = 0xffffffffu;          // the infinite_sphere_cap light, index in the light table
     uint32_t lightCount = 0;
     float sceneExtent = 1.0f;   // bounding-box diagonal of the geometry (1 when empty)
@@ -43,6 +44,7 @@ struct GpuScene {
     std::vector<shader::MediumGpu> media;    // never empty (a dummy without media)
     std::vector<float> gridData;             // voxels of every grid medium
     std::vector<uint32_t> primMedia;         // per prim slot (shader::kPrimMediaNone or packed)
+    std::vector<float> environment;          // the environment image and its tables (one float without)
     SceneFeatures features;
 };
 

@@ -41,6 +41,7 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uin
     media_ = makeBuffer(gpuScene_.media, "media");  // dummies without media
     gridData_ = makeBuffer(gpuScene_.gridData, "grid data");
     primMedia_ = makeBuffer(gpuScene_.primMedia, "prim media");
+    environment_ = makeBuffer(gpuScene_.environment, "environment");
 
     // ---- Accumulation: (hi, lo) vec4 pairs per channel and pixel ----
     const uint64_t pixels = uint64_t(scene.camera.width) * scene.camera.height;
@@ -53,7 +54,7 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uin
 
     stats_.uploadSeconds = secondsSince(phase);
     phase = Clock::now();
-    const RenderBuffers buffers{&prims_, &nodes_, &materials_, &lights_, &accum_, &media_, &gridData_, &primMedia_};
+    const RenderBuffers buffers{&prims_, &nodes_, &materials_, &lights_, &accum_, &media_, &gridData_, &primMedia_, &environment_};
     passes_ = usesPhotons(scene.integrator) ? makePhotonPasses(context, scene, plan_, buffers, seed)
                                             : makePathTracePasses(context, scene, plan_, buffers, seed);
     batch_ = std::make_unique<gpu::CommandBatch>(context, kMaxDispatchesPerBatch);

@@ -53,6 +53,7 @@ struct RenderBuffers {
     const gpu::Buffer* media = nullptr;
     const gpu::Buffer* gridData = nullptr;
     const gpu::Buffer* primMedia = nullptr;
+    const gpu::Buffer* environment = nullptr;  // binding kBindingEnvironment of path_trace
 };
 
 class SamplePasses {
