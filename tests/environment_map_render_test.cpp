@@ -22,6 +22,7 @@
 #include "cli_process.h"
 #include "region_stats.h"
 #include "render/environment_map.h"
+#include "render/image_output.h"
 #include "render_harness.h"
 
 namespace envmap_render_test {
@@ -174,6 +175,8 @@ TEST_F(EnvironmentMapFiles, ConstantImageEqualsTheConstantInfiniteSphere) {
 // Bad input: one clear message naming the scene file and the key; exit code 2.
 TEST_F(EnvironmentMapFiles, BadImagesAreAClearErrorWithExitCode2) {
     writeExr("sky.exr", 8, 4, [](int, int) { return glm::vec3(1.0f); });
+    writeExr("big.exr", 4096, 2048, [](int, int) { return glm::vec3(1.0f); });  // 2 KiB over one binding
+    writeSrgbPng((dir_ / "ldr.png").string(), 4, 2, std::vector<float>(4 * 2 * 3, 0.5f));
     std::ofstream(dir_ / "not-an-image.exr") << "plain text";
     struct Case {
         const char* name;
@@ -186,6 +189,8 @@ TEST_F(EnvironmentMapFiles, BadImagesAreAClearErrorWithExitCode2) {
         {"unreadable", R"("not-an-image.exr")", "primitives[1].emission", "not-an-image.exr"},
         {"missing-file-key", R"({"type": "bitmap"})", "primitives[1].emission", "missing 'file'"},
         {"wrong-texture", R"({"type": "checker"})", "primitives[1].emission.type", "unsupported texture type 'checker'"},
+        {"too-large", R"("big.exr")", "primitives[1].emission", "must fit one 128 MiB storage-buffer binding"},
+        {"not-hdr", R"({"type": "bitmap", "file": "ldr.png"})", "primitives[1].emission.file", "not a high-dynamic-range image"},
         {"wrong-interpolate", R"({"type": "bitmap", "file": "sky.exr", "interpolate": 3})",
          "primitives[1].emission.interpolate", "expected"},
     };
