@@ -148,6 +148,15 @@ TEST_F(EnvironmentMapFiles, ConstantImageEqualsTheConstantInfiniteSphere) {
     const RegionMean ma = imageMean(a), mb = imageMean(b);
     std::printf("constant image %.5f, constant infinite_sphere %.5f, closed form %.5f\n", ma.mean.x, mb.mean.x,
                 answer.x);
+    // Control: light sampling claims a pdf 1.2 times the true one (the NEE weight and its MIS
+    // weight mis-weighted; escaped rays keep the true pdf).
+    environmentTestPdfScale = 1.2f;
+    const Film w = renderFilm(image, 64, 97);
+    environmentTestPdfScale = 1.0f;
+    const ZSummary zw = againstValue(w, answer);
+    std::printf("control, NEE pdf x 1.2: image %.5f, %zu of %zu tests fail (worst %s)\n", imageMean(w).mean.x,
+                zw.failing, zw.tests, zw.worst.c_str());
+    EXPECT_GT(zw.failing, 0u) << zw.worst;
 
     // A sky of 4 at the zenith falling to 0 at the horizon and below (only elevation matters),
     // and the same image upside down.

@@ -20,7 +20,7 @@
 SHADER_NAMESPACE_BEGIN
 
 // ---- Layout of the environment buffer (floats) ----
-// [0] width w, [1] height h, [2] flags (kEnv*), [3] unused,
+// [0] width w, [1] height h, [2] flags (kEnv*), [3] tests only: a factor on envSample's pdf (1),
 // [4..12] the rotation (local -> world), row-major, [13..15] unused;
 // then the texels (3 floats each, row 0 the top row of the image, x fastest),
 // then the rows' inclusive cdf (h floats, the last exactly 1),
@@ -147,7 +147,8 @@ FN bool envSample(vec2 xi, OUT(vec3) dirWorld, OUT(vec2) uv, OUT(float) pdf) {
     float sinTheta;
     vec3 l = envUvToLocal(uv, sinTheta);
     if (!(sinTheta > 0.0f)) return false;
-    pdf = (rowHi - rowLo) * (columnHi - columnLo) * float(w) * float(h) / (2.0f * kPi * kPi * sinTheta);
+    pdf = (rowHi - rowLo) * (columnHi - columnLo) * float(w) * float(h) / (2.0f * kPi * kPi * sinTheta) *
+          ENV_DATA(3u);
     dirWorld = envToWorld(l);
     return pdf > 0.0f;
 }

@@ -42,6 +42,7 @@ std::vector<float> buildEnvironmentBuffer(const EnvironmentImage& image, const g
     std::vector<float> out(shader::envBufferFloats(w, h), 0.0f);
     out[0] = float(w);
     out[1] = float(h);
+    out[3] = environmentTestPdfScale;
     out[2] = float((image.interpolate ? shader::kEnvInterpolate : 0u) | (image.clamp ? shader::kEnvClamp : 0u));
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c) out[4 + 3 * r + c] = rotation[c][r];  // glm: [column][row]

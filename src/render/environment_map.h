@@ -17,6 +17,10 @@ namespace telescope {
 // clamped), so that a bilinear lookup is never non-zero where the density is 0.
 std::vector<double> environmentSamplingWeights(const EnvironmentImage& image);
 
+// Tests only (a positive control of the render tests): light sampling claims its pdf this many
+// times too large. 1 everywhere else.
+inline float environmentTestPdfScale = 1.0f;
+
 // The buffer: header, texels (times the image's scale), the rows' cdf and each row's column cdf.
 std::vector<float> buildEnvironmentBuffer(const EnvironmentImage& image, const glm::mat3& rotation);
 
