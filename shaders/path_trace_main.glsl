@@ -41,6 +41,12 @@ layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[
 layout(std430, binding = kBindingMaterials) readonly buffer MaterialBuffer { MaterialGpu materials[]; };
 layout(std430, binding = kBindingLights) readonly buffer LightBuffer { LightGpu lights[]; };
 layout(std430, binding = kBindingTextures) readonly buffer TextureBuffer { vec4 textureData[]; };
+// The environment image and its sampling tables (shared/environment_map.h), read only when the
+// environment light has one.
+layout(constant_id = kSpecEnvironmentMap) const bool kEnvironmentMap = false;
+layout(std430, binding = kBindingEnvironment) readonly buffer EnvironmentBuffer { float envData[]; };
+#define ENV_DATA(i) envData[i]
+#include "shared/environment_map.h"
 
 layout(constant_id = kSpecSceneInUniforms) const bool kSceneInUniforms = false;
 layout(std140, binding = kBindingBvhUniform) uniform BvhUniform { BvhNode uniformNodes[kMaxUniformNodes]; };

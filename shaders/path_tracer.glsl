@@ -207,8 +207,8 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         if (kEnvironmentLight != 0xffffffffu) {
             LightGpu env = lights[kEnvironmentLight];
             float mis = (s.specularPrev || !kLightSampling) ? 1.0
-                                                             : powerHeuristic(s.pdfPrev, env.pmf / (4.0 * kPi));
-            addContribution(s.result, v - 1u, s.throughput * env.radiance * mis, pmf, s.level);
+                                                             : powerHeuristic(s.pdfPrev, environmentPdf(env, s.dir));
+            addContribution(s.result, v - 1u, s.throughput * environmentRadiance(env, s.dir) * mis, pmf, s.level);
         }
         if (kCapLight != 0xffffffffu) {
             LightGpu cap = lights[kCapLight];

@@ -29,6 +29,21 @@ vec3 primEmission(Prim pr, vec3 dir, vec3 ng) {
 }
 
 // ---- Lights ----
+// Radiance of the environment light along dir and the solid-angle density with which light
+// sampling picks dir (path_trace only: with an image, kEnvironmentMap and shared/environment_map.h).
+vec3 environmentRadiance(LightGpu env, vec3 dir) {
+#ifdef ENV_DATA
+    if (kEnvironmentMap) return envRadiance(dir);
+#endif
+    return env.radiance;
+}
+float environmentPdf(LightGpu env, vec3 dir) {
+#ifdef ENV_DATA
+    if (kEnvironmentMap) return env.pmf * envPdf(dir);
+#endif
+    return env.pmf / (4.0 * kPi);
+}
+
 // Solid-angle density with which next-event estimation picks a point on an emissive prim.
 float areaLightPdf(uint lightIndex, float area, float dist, float cosLight) {
     return lights[lightIndex].pmf * dist * dist / max(cosLight * area, 1e-30);
@@ -60,8 +75,19 @@ bool sampleLight(vec3 p, inout Rng rng, out LightSample ls) {
         ls.pdf = light.pmf / (2.0 * kPi * (1.0 - light.cosCap));
         ls.weight = light.radiance / ls.pdf;
     } else if (light.type == kLightEnvironment) {
-        ls.wi = sampleUniformSphere(u1, u2);
         ls.dist = kInfinity;
+#ifdef ENV_DATA
+        if (kEnvironmentMap) {
+            // Importance-sampled image (shared/environment_map.h, Tungsten's InfiniteSphere::sampleDirect)
+            vec2 uv;
+            float pdf;
+            if (!envSample(vec2(u1, u2), ls.wi, uv, pdf)) return false;
+            ls.pdf = light.pmf * pdf;
+            ls.weight = envLookup(uv) / ls.pdf;
+            return true;
+        }
+#endif
+        ls.wi = sampleUniformSphere(u1, u2);
         ls.pdf = light.pmf / (4.0 * kPi);
         ls.weight = light.radiance / ls.pdf;
     } else {

@@ -118,7 +118,10 @@ CONST uint kBindingPrimsUniform = 8u;
 // Textures (shared/texture.h): one vec4 buffer with the texture table, per-prim uv maps and texels;
 // a dummy vec4 without textures.
 CONST uint kBindingTextures = 9u;
-CONST uint kPathTraceBindingCount = 10u;
+// The environment image of an infinite_sphere and its sampling tables (shared/environment_map.h;
+// one dummy float without): every path_trace pipeline binds it, only kSpecEnvironmentMap reads it.
+CONST uint kBindingEnvironment = 10u;
+CONST uint kPathTraceBindingCount = 11u;
 CONST uint kUniformSceneBytes = 65536u;  // maxUniformBufferRange on lavapipe; the Vulkan minimum is 16384
 CONST uint kMaxUniformNodes = 2048u;     // kUniformSceneBytes / sizeof(BvhNode)
 CONST uint kMaxUniformPrims = 1024u;     // kUniformSceneBytes / sizeof(Prim)
@@ -149,6 +152,7 @@ CONST uint kSpecTestPmfWeight = 18u;     // test-only: scales every 1 / p(j) (de
 CONST uint kSpecSceneInUniforms = 19u;   // BVH nodes and primitives read from the uniform bindings
 CONST uint kSpecBsdfFamilies = 21u;     // kFamily* bits: the non-delta material families present
 CONST uint kSpecHasTextures = 22u;      // some material has a texture (uvs are computed at its hits)
+CONST uint kSpecEnvironmentMap = 23u;    // the environment light (kSpecEnvironmentLight) has an image
 
 // Participating media, ids 32..47 (shaders/medium.glsl).
 CONST uint kSpecHasMedia = 32u;          // media or forward (index-matched) boundaries present

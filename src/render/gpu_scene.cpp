@@ -11,6 +11,7 @@
 #include <glm/gtc/matrix_access.hpp>
 
 #include "core/error.h"
+#include "render/environment_map.h"
 #include "scene/density_grid.h"
 
 namespace telescope {
@@ -242,10 +243,11 @@ GpuScene buildGpuScene(const Scene& scene) {
 
     // ---- Point lights and the environment ----
     for (const PointLikeLight& pl : scene.lights) {
-        float lum = luminanceOf(pl.intensity);
+        const glm::vec3 intensity = pl.image ? environmentMeanRadiance(*pl.image) : pl.intensity;
+        float lum = luminanceOf(intensity);
         if (!(lum > 0.0f)) continue;
         shader::LightGpu l{};
-        l.radiance = pl.intensity;
+        l.radiance = intensity;
         if (pl.type == LightType::Point) {
             l.type = uint32_t(pl.type);  // LightType takes its values from kLight*
             l.position = pl.position;
@@ -266,6 +268,12 @@ GpuScene buildGpuScene(const Scene& scene) {
             power.push_back(lum * glm::pi<float>() * 4.0f * glm::pi<float>() * r * r);
             f.environment = true;
             f.environmentLight = uint32_t(out.lights.size());
+            if (pl.image) {
+                // The image, its rotation and sampling tables (shaders/shared/environment_map.h); the
+                // light's radiance is the mean, for light selection by power.
+                out.environment = buildEnvironmentBuffer(*pl.image, pl.rotation);
+                f.environmentMap = true;
+            }
         }
         out.lights.push_back(l);
     }
@@ -290,6 +298,7 @@ GpuScene buildGpuScene(const Scene& scene) {
     for (const Medium& m : scene.media) f.grids = f.grids || m.type == MediumType::Grid;
     if (out.media.empty()) out.media.push_back({});
     if (out.gridData.empty()) out.gridData.push_back(0.0f);
+    if (out.environment.empty()) out.environment.push_back(0.0f);
     while (out.primMedia.size() < out.prims.size()) out.primMedia.push_back(shader::kPrimMediaNone);
     // ---- Textures: header, table, uv records, texels (shared/texture.h) ----
     if (f.textures) {

@@ -19,6 +19,7 @@ struct SceneFeatures {
     bool pointLights = false;
     bool environment = false;
     uint32_t environmentLight = 0xffffffffu;  // index in the light table
+    bool environmentMap = false;              // the environment has an image (kSpecEnvironmentMap)
     uint32_t capLight = 0xffffffffu;          // the infinite_sphere_cap light, index in the light table
     uint32_t lightCount = 0;
     float sceneExtent = 1.0f;   // bounding-box diagonal of the geometry (1 when empty)
@@ -46,6 +47,7 @@ struct GpuScene {
     std::vector<float> gridData;             // voxels of every grid medium
     std::vector<uint32_t> primMedia;         // per prim slot (shader::kPrimMediaNone or packed)
     std::vector<glm::vec4> textureData;      // shared/texture.h's layout (one dummy vec4 without textures)
+    std::vector<float> environment;          // the environment image and its tables (one float without)
     SceneFeatures features;
 };
 

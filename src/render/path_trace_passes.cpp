@@ -110,6 +110,8 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     feature("light sampling", in.enableLightSampling && f.lightCount > 0, "next-event estimation",
             in.enableLightSampling ? "no lights" : "enable_light_sampling is false");
     feature("environment", f.environment, "infinite_sphere emitter", "no environment emitter");
+    feature("environment map", f.environmentMap, "infinite_sphere with an image, importance-sampled",
+            "no environment image");
     feature("sphere cap", f.capLight != 0xffffffffu, "infinite_sphere_cap emitter", "no infinite_sphere_cap emitter");
     feature("debias", in.debias.estimator != DebiasEstimator::None, "debias block in the integrator",
             "no debias block: plain I(k)");
@@ -146,6 +148,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecSceneInUniforms, f.fitsUniforms},
         {kSpecBsdfFamilies, f.bsdfFamilies},
         {kSpecHasTextures, f.textures},
+        {kSpecEnvironmentMap, f.environmentMap},
         {kSpecHasMedia, f.media},
         {kSpecTrEstimator, uint32_t(in.transmittance.type)},
         {kSpecTrLevel, in.transmittance.level},
@@ -169,7 +172,8 @@ public:
                     deviceSpec(context, plan.pathTraceSpec),
                     (1u << shader::kBindingBvhUniform) | (1u << shader::kBindingPrimsUniform)) {
         pipeline_.bindBuffers(
-            {b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims, b.textures});
+            {b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims, b.textures,
+             b.environment});
         const Camera& cam = scene.camera;
         setPushCamera(push_, cam);
         push_.width = cam.width;

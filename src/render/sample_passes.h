@@ -54,6 +54,7 @@ struct RenderBuffers {
     const gpu::Buffer* gridData = nullptr;
     const gpu::Buffer* primMedia = nullptr;
     const gpu::Buffer* textures = nullptr;  // binding 9 of path_trace (shared/texture.h)
+    const gpu::Buffer* environment = nullptr;  // binding kBindingEnvironment of path_trace
 };
 
 class SamplePasses {

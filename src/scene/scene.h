@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -163,12 +164,26 @@ const char* transmittanceEstimatorName(TransmittanceEstimatorType t);
 enum class LightType : uint32_t { Point = shader::kLightPoint, Environment = shader::kLightEnvironment, Cap = shader::kLightCap };
 
 // Non-geometric emitters (area lights are the emissive Geometry entries).
+// The image of an infinite_sphere's emission (Tungsten's BitmapTexture; shaders/shared/environment_map.h).
+struct EnvironmentImage {
+    uint32_t width = 0, height = 0;
+    std::vector<float> rgb;    // 3 floats a texel, row 0 the top of the image (the +y pole)
+    float scale = 1.0f;        // `scale` (and power -> radiance)
+    bool interpolate = true;   // `interpolate`: bilinear lookups
+    bool clamp = false;        // `clamp`: clamp lookups at the edges, else wrap
+    std::string file;          // as resolved, for messages
+};
+
 struct PointLikeLight {
     LightType type = LightType::Point;
     glm::vec3 position{0.0f};     // point
     glm::vec3 intensity{0.0f};    // point: radiant intensity (W/sr); environment, cap: radiance
     glm::vec3 direction{0.0f, 1.0f, 0.0f};  // cap: the cone's axis (unit; light arrives from it)
     float cosCap = -1.0f;                    // cap: cosine of the cone's half angle
+    // environment with an image: the image (intensity: its mean radiance) and the rotation part
+    // of the primitive's transform (local -> world)
+    std::shared_ptr<const EnvironmentImage> image;
+    glm::mat3 rotation{1.0f};
     std::string name;
 };
 

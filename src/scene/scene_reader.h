@@ -109,6 +109,7 @@ private:
 
     // Shapes (shape_reader.cpp)
     void readPrimitive(const json& v, const std::string& key);
+    void readEnvironmentImage(const json& v, const std::string& key, const glm::mat4& m, const std::string& name);
 
     // Settings (settings_reader.cpp)
     void readCamera(const json& v);

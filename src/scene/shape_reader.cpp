@@ -5,8 +5,10 @@
 
 #include <cmath>
 
+#include "scene/image_file.h"
 #include "scene/mesh_io.h"
 #include "scene/transform.h"
+#include "shared/environment_map.h"
 
 namespace telescope::scene_reader {
 
@@ -63,6 +65,13 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
 
     const glm::mat4 m = find(v, "transform") ? transform(v["transform"], member(key, "transform")) : glm::mat4(1.0f);
 
+    // An infinite_sphere's emission (or power) may be an image (Tungsten's bitmap texture).
+    auto isImage = [](const json* e) { return e && (e->is_string() || e->is_object()); };
+    if (type == "infinite_sphere" && (isImage(find(v, "emission")) || isImage(find(v, "power")))) {
+        readEnvironmentImage(v, key, m, shape.name);
+        return;
+    }
+
     // Emission: radiance, or power converted with the shape's power-to-radiance factor
     std::optional<glm::vec3> emission, power;
     if (const json* e = find(v, "emission")) emission = colour(*e, member(key, "emission"));
@@ -101,7 +110,11 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
         light.intensity = power ? *power / (4.0f * kPi) : emission.value_or(glm::vec3(0.0f));
         light.name = shape.name;
         if (light.intensity != glm::vec3(0.0f)) scene_.lights.push_back(light);
-        ignoreUnread(v, key, {"name", "type", "transform", "emission", "power"});
+        if (find(v, "sample")) ignore(member(key, "sample"));  // Tungsten's light-sampling switch: same image
+        for (const PointLikeLight& l : scene_.lights)
+            if (type == "infinite_sphere" && l.type == LightType::Environment && l.image)
+                fail(key, "only one infinite_sphere per scene is supported when one has an image");
+        ignoreUnread(v, key, {"name", "type", "transform", "emission", "power", "sample"});
         return;
     }
 
@@ -211,6 +224,96 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
         scene_.geometry.push_back(g);
     }
     ignoreUnread(v, key, {"name", "type", "transform", "bsdf", "emission", "power", "file", "int_medium", "ext_medium"});
+}
+
+// An infinite_sphere whose emission (or power) is an image: a file name relative to the scene file,
+// or a {"type": "bitmap", "file": ...} object with Tungsten's BitmapTexture keys (gamma_correct
+// only concerns 8-bit images, which are refused; interpolate true and clamp false by default).
+// Power is radiance times 4 pi (InfiniteSphere::powerToRadianceFactor).
+void SceneReader::readEnvironmentImage(const json& v, const std::string& key, const glm::mat4& m,
+                                       const std::string& name) {
+    const bool fromPower = find(v, "emission") == nullptr;
+    const std::string valueKey = member(key, fromPower ? "power" : "emission");
+    if (!fromPower && find(v, "power")) ignore(member(key, "power"));
+    const json& value = v[fromPower ? "power" : "emission"];
+    auto image = std::make_shared<EnvironmentImage>();
+    std::string fileKey = valueKey;
+    fs::path relative;
+    if (value.is_string()) {
+        relative = string(value, valueKey);
+    } else {
+        const std::string textureType = requiredType(value, valueKey);
+        if (textureType != "bitmap")
+            fail(member(valueKey, "type"), fmt::format("unsupported texture type '{}' for an infinite_sphere (only "
+                                                       "'bitmap' images)", textureType));
+        fileKey = member(valueKey, "file");
+        const json* file = find(value, "file");
+        if (!file) fail(valueKey, "missing 'file'");
+        relative = string(*file, fileKey);
+        if (const json* b = find(value, "interpolate")) image->interpolate = boolean(*b, member(valueKey, "interpolate"));
+        if (const json* b = find(value, "clamp")) image->clamp = boolean(*b, member(valueKey, "clamp"));
+        if (const json* b = find(value, "gamma_correct")) boolean(*b, member(valueKey, "gamma_correct"));
+        if (const json* s = find(value, "scale")) {
+            image->scale = number(*s, member(valueKey, "scale"));
+            if (!(image->scale >= 0.0f) || !std::isfinite(image->scale))
+                fail(member(valueKey, "scale"), "must be finite and non-negative");
+        }
+        ignoreUnread(value, valueKey, {"type", "file", "interpolate", "clamp", "gamma_correct", "scale"});
+    }
+    if (relative.empty()) fail(fileKey, "empty image file name");
+    const fs::path path = relative.is_absolute() ? relative : baseDir_ / relative;
+    image->file = path.string();
+
+    // The buffer (shaders/shared/environment_map.h) must fit one storage-buffer binding.
+    const uint64_t maxTexels = (shader::kEnvMaxBufferBytes / 4 - shader::kEnvHeaderFloats) / 4;
+    ImageFileData data;
+    try {
+        int32_t status = kImageOk;
+        data = readImageFile(path.string(), maxTexels, status);
+    } catch (const std::exception& e) {
+        fail(fileKey, fmt::format("{}{}", e.what(),
+                                  std::string(e.what()).find("more than") != std::string::npos
+                                      ? " (an environment image and its sampling tables must fit one 128 MiB "
+                                        "storage-buffer binding)"
+                                      : ""));
+    }
+    if (shader::envBufferFloats(data.width, data.height) * 4 > shader::kEnvMaxBufferBytes)
+        fail(fileKey, fmt::format("image '{}' ({}x{}) is too large: an environment image and its sampling tables "
+                                  "must fit one 128 MiB storage-buffer binding",
+                                  path.string(), data.width, data.height));
+    if (!data.floatingPoint)
+        fail(fileKey, fmt::format("image '{}' is not a high-dynamic-range image (8- or 16-bit integer pixels); "
+                                  "an infinite_sphere needs radiance: use .exr, .hdr or .pfm",
+                                  path.string()));
+    for (float c : data.pixels)
+        if (!std::isfinite(c)) fail(fileKey, fmt::format("image '{}' has non-finite pixels", path.string()));
+    // RGB from the file's channels: one channel is grey, more than three keep the first three.
+    image->width = data.width;
+    image->height = data.height;
+    const size_t texels = size_t(data.width) * data.height, channels = data.channels;
+    image->rgb.resize(texels * 3);
+    for (size_t i = 0; i < texels; ++i)
+        for (size_t c = 0; c < 3; ++c)
+            image->rgb[3 * i + c] = data.pixels[i * channels + (channels >= 3 ? c : 0)];
+    if (fromPower) image->scale *= 1.0f / (4.0f * kPi);
+
+    PointLikeLight light;
+    light.type = LightType::Environment;
+    light.name = name;
+    light.rotation = columnDirections(m);
+    for (int c = 0; c < 3; ++c)
+        if (isDegenerate(light.rotation[c])) fail(member(key, "transform"), "the rotation is degenerate");
+    double mean = 0.0;
+    for (float c : image->rgb) mean += std::abs(c);
+    // Tungsten's `sample` (InfiniteSphere::_doSample) only changes the noise: the environment is
+    // always light-sampled here.
+    if (find(v, "sample")) ignore(member(key, "sample"));
+    for (const PointLikeLight& l : scene_.lights)
+        if (l.type == LightType::Environment) fail(key, "only one infinite_sphere per scene is supported when one has an image");
+    light.image = std::move(image);
+    light.intensity = glm::vec3(0.0f);  // the mean radiance, set by the GPU scene
+    if (mean > 0.0 && light.image->scale > 0.0f) scene_.lights.push_back(light);
+    ignoreUnread(v, key, {"name", "type", "transform", "emission", "power", "sample"});
 }
 
 }  // namespace telescope::scene_reader
