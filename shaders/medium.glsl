@@ -23,10 +23,15 @@ layout(constant_id = kSpecTrPmfAlpha) const float kTrPmfAlpha = 0.6666667;
 layout(constant_id = kSpecCameraMedium) const uint kCameraMedium = 0u;
 layout(constant_id = kSpecHasGrids) const bool kHasGrids = false;
 layout(constant_id = kSpecTrModel) const uint kSceneTrModel = 0xffffffffu;
+layout(constant_id = kSpecHasInhomogeneousMedia) const bool kHasInhomogeneous = true;
 
 layout(std430, binding = kBindingMedia) readonly buffer MediaBuffer { MediumGpu media[]; };
 layout(std430, binding = kBindingGridData) readonly buffer GridBuffer { float gridData[]; };
 layout(std430, binding = kBindingPrimMedia) readonly buffer PrimMediaBuffer { uint primMedia[]; };
+
+// True when medium mi has one density everywhere. With only homogeneous media in the scene
+// (kHasInhomogeneous false) this is a constant, and the code of varying densities folds away.
+bool mediumIsHomogeneous(uint mi) { return !kHasInhomogeneous || media[mi].type == kMediumHomogeneous; }
 
 // ---- Density ----
 #include "shared/density_grid.h"
@@ -91,6 +96,7 @@ TrModel mediumModel(uint mi) {
 
 // Density (relative to sigma_a, sigma_s) of medium mi at world point p.
 float mediumDensityAt(uint mi, vec3 p) {
+    if (mediumIsHomogeneous(mi)) return media[mi].density;
     uint type = media[mi].type;
     if (type == kMediumExponential)
         return media[mi].density * exp(-media[mi].falloffScale * dot(p - media[mi].unitPoint, media[mi].falloffDir));
@@ -109,7 +115,7 @@ TrSegment mediumSegment(uint mi, vec3 o, vec3 d, float l) {
     s.len = l;
     s.medium = mi;
     s.pad0 = 0u; s.pad1 = 0u; s.pad2 = 0u;
-    if (m.type == kMediumExponential) {
+    if (!mediumIsHomogeneous(mi) && m.type == kMediumExponential) {
         float h0 = dot(o - m.unitPoint, m.falloffDir);
         s.profile = makeProfile(kProfileExponential, m.density * exp(-m.falloffScale * h0),
                                 m.falloffScale * dot(d, m.falloffDir), 0.0);
@@ -223,7 +229,7 @@ vec3 trTrackGrid(uint mode, TrSegment s, inout Rng rng, inout uint lookups) {
 // (linear, pulse) the sub-comb depths can round to opposite sides, and the correction divides
 // that difference by p(j). The trackers stay stochastic (what the scene asked for).
 vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, bool endOnSurface, inout Rng rng) {
-    if (media[mi].type == kMediumHomogeneous &&
+    if (mediumIsHomogeneous(mi) &&
         (kTrEstimatorType == kTrEstRayMarch || kTrEstimatorType == kTrEstDebiasedRayMarch ||
          kTrEstimatorType == kTrEstUnbiasedRayMarch))
         return trForm3(mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
@@ -365,7 +371,7 @@ bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, ino
     emitted = vec3(0.0);
     bool emits = kHasGrids && media[mi].type == kMediumGrid && (media[mi].gridFlags & kGridEmission) != 0u;
     TrModel model = mediumModel(mi);
-    if (!fromSurface && media[mi].type == kMediumHomogeneous && trModelIsDirac(model) &&
+    if (!fromSurface && mediumIsHomogeneous(mi) && trModelIsDirac(model) &&
         trMaxComponent(media[mi].sigmaS) > 0.0)
         return sampleDiracSegment(mi, o, d, l, throughput, p, rng);
     TrSegment whole = mediumSegment(mi, o, d, l);
@@ -375,7 +381,7 @@ bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, ino
     // of everything else (so the pdf is fixed given it), at least 10% of the majorant so that every
     // point with density keeps a positive pdf. Purely absorbing media never scatter (mu = 0).
     float guideDensity = whole.densityMax;
-    if (media[mi].type != kMediumHomogeneous && whole.len > 0.0) {
+    if (!mediumIsHomogeneous(mi) && whole.len > 0.0) {
         uint lookups = 0u;
         float average = combSum(whole, rngNext(rng), 0u, 1u, 8u, 8.0, lookups) / 8.0;
         guideDensity = max(average, 0.1 * whole.densityMax);

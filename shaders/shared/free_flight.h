@@ -22,14 +22,28 @@ FN float sampleDiracDepth(TrModel m, float u) {
     return m.a.x + (0.5f + min(floor(u * n), n - 1.0f)) / n * (m.a.y - m.a.x);
 }
 
-// Inverts the survival function: the depth with F(tau) = 1 - u, F = T_ss (from a surface) or
-// T_ms (from a medium point); closed forms for exponential and Davis, bisection otherwise (on a
-// step of F, as the Dirac flights of linear and pulse, it returns the step).
+// Draws the depth with survival function F = T_ss (from a surface) or T_ms (from a medium point).
+// Closed forms where the inverse has one (exponential, Davis, linear, quadratic) and a pick of one
+// exponential for double_exponential (both forms are mixtures of two exponentials: T_ss with
+// weights 1/2, T_ms with a/(a+b), b/(a+b)); the others invert F by bisection (on a step of F, as
+// the Dirac flights of linear and pulse, it returns the step). The bisection costs about 40
+// evaluations of F per flight, which was most of the render time of the non-exponential scene.
 FN float sampleGuideDepth(TrModel model, bool fromSurface, float u) {
     if (model.type == kTrExponential) return -log(1.0f - u);
     if (model.type == kTrDavis) {
         float a = model.a.x;
         return a * (pow(1.0f - u, -1.0f / (fromSurface ? a : a + 1.0f)) - 1.0f);
+    }
+    if (model.type == kTrLinear) return fromSurface ? model.a.x * u : model.a.x;  // F = 1 - tau/m; a step at m
+    if (model.type == kTrQuadratic) {  // F = (1 - tau/m)^2 from a surface, 1 - tau/m from a medium point
+        float s = fromSurface ? sqrt(1.0f - u) : 1.0f - u;
+        return model.a.x * (1.0f - s);
+    }
+    if (model.type == kTrDoubleExponential) {
+        float a = model.a.x, b = model.a.y;
+        float wa = fromSurface ? 0.5f : a / (a + b);
+        if (u < wa) return -log(1.0f - u / wa) / a;
+        return -log(1.0f - (u - wa) / (1.0f - wa)) / b;
     }
     uint form = fromSurface ? kFormSurfaceSurface : kFormSurfaceMedium;
     float target = 1.0f - u;

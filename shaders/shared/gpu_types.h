@@ -164,6 +164,7 @@ CONST uint kSpecTrPmfAlpha = 37u;
 CONST uint kSpecCameraMedium = 38u;      // medium index + 1, 0 = vacuum
 CONST uint kSpecHasGrids = 39u;
 CONST uint kSpecTrModel = 40u;           // the transmittance model every medium shares, or 0xffffffff
+CONST uint kSpecHasInhomogeneousMedia = 41u;  // a medium whose density varies (exponential or grid)
 
 CONST uint kPathTraceGroupSize = 8u;  // 8x8 pixel tiles
 

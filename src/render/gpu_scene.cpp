@@ -295,7 +295,10 @@ GpuScene buildGpuScene(const Scene& scene) {
     for (const Medium& m : scene.media) out.media.push_back(mediumToGpu(m, out.gridData));
     f.mediumCount = uint32_t(scene.media.size());
     f.media = f.media || !scene.media.empty();
-    for (const Medium& m : scene.media) f.grids = f.grids || m.type == MediumType::Grid;
+    for (const Medium& m : scene.media) {
+        f.grids = f.grids || m.type == MediumType::Grid;
+        f.inhomogeneous = f.inhomogeneous || m.type != MediumType::Homogeneous;
+    }
     if (out.media.empty()) out.media.push_back({});
     if (out.gridData.empty()) out.gridData.push_back(0.0f);
     if (out.environment.empty()) out.environment.push_back(0.0f);

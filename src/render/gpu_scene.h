@@ -25,6 +25,7 @@ struct SceneFeatures {
     float sceneExtent = 1.0f;   // bounding-box diagonal of the geometry (1 when empty)
     bool media = false;         // participating media or forward (medium boundary) surfaces
     bool grids = false;         // grid media
+    bool inhomogeneous = false; // media whose density varies (exponential falloff or grid)
     uint32_t mediumCount = 0;
     bool fitsUniforms = false;  // nodes and prims fit the path tracer's uniform bindings
     bool textures = false;      // some material has a textured parameter

@@ -117,6 +117,8 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
             "no debias block: plain I(k)");
     feature("media", f.media, "media or forward boundaries present", "no participating media");
     feature("grid media", f.grids, "voxel grid media present", "no grid media");
+    feature("inhomogeneous media", f.inhomogeneous, "a medium's density varies: transmittance estimated",
+            f.media ? "every medium homogeneous: comb estimators are exact, their code folded out" : "no participating media");
     feature("uniform scene", f.fitsUniforms, "BVH nodes and primitives read from uniform buffers (faster loads)",
             "more than 2048 BVH nodes or 1024 primitives: read from storage buffers");
 
@@ -157,6 +159,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecTrPmfAlpha, gpu::specFloat(in.transmittance.pmf.alpha)},
         {kSpecCameraMedium, uint32_t(scene.camera.medium + 1)},
         {kSpecHasGrids, f.grids},
+        {kSpecHasInhomogeneousMedia, f.inhomogeneous},
         {kSpecTrModel, sharedTransmittanceModel(scene)},
     };
 }
