@@ -383,6 +383,20 @@ TEST_F(GlossyRender, TransparencyOverAGroundMatchesItsClosedForm) {
     checkClosedForm("scenes/transparency.json", {}, {{"bsdfs[0].alpha", "0.5"}}, 47, answer);
 }
 
+// The white furnace of transparency: a white base over a white ground under the sky of radiance
+// 1 reflects everything, so every pixel is 1 (the closed form above with a = rho = 1: alpha +
+// (1 - alpha)^2 / (1 - alpha)), whatever alpha; the passes and the base's scattering together lose
+// nothing. Light bounces between the ground and the sheet's base (each pass and each scattering
+// is a bounce): the scene's max_bounces 16 cuts off 1.0% (measured 0.9896), so the furnace runs at
+// 64 (cut-off about 0.4 x 0.6^31 < 1e-7). Control: a base of albedo 0.9, against the same answer 1.
+TEST_F(GlossyRender, WhiteTransparencyIsAWhiteFurnace) {
+    checkClosedForm("scenes/transparency.json",
+                    {{"bsdfs[0].base.albedo", "1"}, {"bsdfs[1].albedo", "1"}, {"integrator.max_bounces", "64"}},
+                    {{"bsdfs[0].base.albedo", "0.9"}}, 49, [](const Scene&) {
+                        return std::function<glm::dvec3(glm::vec3)>([](glm::vec3) { return glm::dvec3(1.0); });
+                    });
+}
+
 // scenes/mixed.json: a plate of ratio x rough copper + (1 - ratio) x Lambert under the sky: a pixel
 // is ratio E_copper(mu) + (1 - ratio) albedo, E_copper the copper's directional albedo by
 // quadrature. Also with a mirror (a Dirac component) for the copper: ratio + (1 - ratio) albedo.

@@ -416,7 +416,9 @@ TEST(Intersect, QuadIsTheWholeParallelogram) {
         // test is not the triangle test).
         const bool tri = shader::intersectTriangle(target + vec3(0.0f, 0.0f, 2.0f), vec3(0.0f, 0.0f, -1.0f), p0,
                                                    p0 + e1, p0 + e2, 0.0f, shader::kInfinity, t, bary);
-        if (in && u + v > 1.0f + 1e-3f) EXPECT_FALSE(tri);
+        if (in && u + v > 1.0f + 1e-3f) {
+            EXPECT_FALSE(tri);
+        }
     }
     EXPECT_EQ(wrong, 0);
     EXPECT_GT(inside, 800);  // a quarter of the (u, v) square: about 1000
