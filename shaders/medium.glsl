@@ -29,9 +29,12 @@ layout(std430, binding = kBindingMedia) readonly buffer MediaBuffer { MediumGpu 
 layout(std430, binding = kBindingGridData) readonly buffer GridBuffer { float gridData[]; };
 layout(std430, binding = kBindingPrimMedia) readonly buffer PrimMediaBuffer { uint primMedia[]; };
 
-// True when medium mi has one density everywhere. With only homogeneous media in the scene
-// (kHasInhomogeneous false) this is a constant, and the code of varying densities folds away.
-bool mediumIsHomogeneous(uint mi) { return !kHasInhomogeneous || media[mi].type == kMediumHomogeneous; }
+// With only homogeneous media in the scene (kHasInhomogeneous false) the code of varying densities
+// folds away. Code a specialisation constant removes is gated by the constant alone (a nested `if`,
+// or a constant expression such as kCombExactEverywhere below), never by `constant && runtime
+// value` through a function call: glslang turns such a condition into short-circuit control flow
+// that lavapipe folds only after optimising everything it guards, which made the path tracer's
+// creation 4x slower (docs/BENCHMARKS.media-notes.md).
 
 // ---- Density ----
 #include "shared/density_grid.h"
@@ -96,7 +99,7 @@ TrModel mediumModel(uint mi) {
 
 // Density (relative to sigma_a, sigma_s) of medium mi at world point p.
 float mediumDensityAt(uint mi, vec3 p) {
-    if (mediumIsHomogeneous(mi)) return media[mi].density;
+    if (!kHasInhomogeneous) return media[mi].density;
     uint type = media[mi].type;
     if (type == kMediumExponential)
         return media[mi].density * exp(-media[mi].falloffScale * dot(p - media[mi].unitPoint, media[mi].falloffDir));
@@ -115,7 +118,7 @@ TrSegment mediumSegment(uint mi, vec3 o, vec3 d, float l) {
     s.len = l;
     s.medium = mi;
     s.pad0 = 0u; s.pad1 = 0u; s.pad2 = 0u;
-    if (!mediumIsHomogeneous(mi) && m.type == kMediumExponential) {
+    if (kHasInhomogeneous && m.type == kMediumExponential) {
         float h0 = dot(o - m.unitPoint, m.falloffDir);
         s.profile = makeProfile(kProfileExponential, m.density * exp(-m.falloffScale * h0),
                                 m.falloffScale * dot(d, m.falloffDir), 0.0);
@@ -228,18 +231,23 @@ vec3 trTrackGrid(uint mode, TrSegment s, inout Rng rng, inout uint lookups) {
 // without marching. Besides the work, marching would only add rounding: at a kink or step of g
 // (linear, pulse) the sub-comb depths can round to opposite sides, and the correction divides
 // that difference by p(j). The trackers stay stochastic (what the scene asked for).
+const bool kCombEstimator = kTrEstimatorType == kTrEstRayMarch || kTrEstimatorType == kTrEstDebiasedRayMarch ||
+                            kTrEstimatorType == kTrEstUnbiasedRayMarch;
+const bool kCombExactEverywhere = kCombEstimator && !kHasInhomogeneous;
+const bool kGridTracking = kHasGrids && (kTrEstimatorType == kTrEstDeltaTracking || kTrEstimatorType == kTrEstRatioTracking ||
+                                          kTrEstimatorType == kTrEstResidualRatioTracking);
 vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, bool endOnSurface, inout Rng rng) {
-    if (mediumIsHomogeneous(mi) &&
-        (kTrEstimatorType == kTrEstRayMarch || kTrEstimatorType == kTrEstDebiasedRayMarch ||
-         kTrEstimatorType == kTrEstUnbiasedRayMarch))
+    if (kCombExactEverywhere)
+        return trForm3(mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
+                       media[mi].sigmaT * (media[mi].density * max(l, 0.0)));
+    if (kCombEstimator && media[mi].type == kMediumHomogeneous)
         return trForm3(mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
                        media[mi].sigmaT * (media[mi].density * max(l, 0.0)));
     uint lookups = 0u;
     TrSegment s = mediumSegment(mi, o, d, l);
-    if (kHasGrids && media[mi].type == kMediumGrid &&
-        (kTrEstimatorType == kTrEstDeltaTracking || kTrEstimatorType == kTrEstRatioTracking ||
-         kTrEstimatorType == kTrEstResidualRatioTracking))
-        return trTrackGrid(kTrEstimatorType, s, rng, lookups);
+    if (kGridTracking) {
+        if (media[mi].type == kMediumGrid) return trTrackGrid(kTrEstimatorType, s, rng, lookups);
+    }
     return trEstimate(sceneTrEstimator(), mediumModel(mi), trFormOf(startOnSurface, endOnSurface), s, rng, lookups);
 }
 
@@ -371,7 +379,7 @@ bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, ino
     emitted = vec3(0.0);
     bool emits = kHasGrids && media[mi].type == kMediumGrid && (media[mi].gridFlags & kGridEmission) != 0u;
     TrModel model = mediumModel(mi);
-    if (!fromSurface && mediumIsHomogeneous(mi) && trModelIsDirac(model) &&
+    if (!fromSurface && (!kHasInhomogeneous || media[mi].type == kMediumHomogeneous) && trModelIsDirac(model) &&
         trMaxComponent(media[mi].sigmaS) > 0.0)
         return sampleDiracSegment(mi, o, d, l, throughput, p, rng);
     TrSegment whole = mediumSegment(mi, o, d, l);
@@ -381,10 +389,12 @@ bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, ino
     // of everything else (so the pdf is fixed given it), at least 10% of the majorant so that every
     // point with density keeps a positive pdf. Purely absorbing media never scatter (mu = 0).
     float guideDensity = whole.densityMax;
-    if (!mediumIsHomogeneous(mi) && whole.len > 0.0) {
-        uint lookups = 0u;
-        float average = combSum(whole, rngNext(rng), 0u, 1u, 8u, 8.0, lookups) / 8.0;
-        guideDensity = max(average, 0.1 * whole.densityMax);
+    if (kHasInhomogeneous) {
+        if (media[mi].type != kMediumHomogeneous && whole.len > 0.0) {
+            uint lookups = 0u;
+            float average = combSum(whole, rngNext(rng), 0u, 1u, 8u, 8.0, lookups) / 8.0;
+            guideDensity = max(average, 0.1 * whole.densityMax);
+        }
     }
     float mu = (trMaxComponent(media[mi].sigmaS) > 0.0 || emits) ? trMaxComponent(whole.sigmaT) * guideDensity : 0.0;
     float sigmaBar = trSigmaBar(model);
