@@ -23,7 +23,8 @@ FN float sampleDiracDepth(TrModel m, float u) {
 }
 
 // Draws the depth with survival function F = T_ss (from a surface) or T_ms (from a medium point).
-// Closed forms where the inverse has one (exponential, Davis, linear, quadratic) and a pick of one
+// Closed forms where the inverse has one (exponential, Davis, linear, quadratic, pulse from a
+// surface) and a pick of one
 // exponential for double_exponential (both forms are mixtures of two exponentials: T_ss with
 // weights 1/2, T_ms with a/(a+b), b/(a+b)); the others invert F by bisection (on a step of F, as
 // the Dirac flights of linear and pulse, it returns the step). The bisection costs about 40
@@ -38,6 +39,15 @@ FN float sampleGuideDepth(TrModel model, bool fromSurface, float u) {
     if (model.type == kTrQuadratic) {  // F = (1 - tau/m)^2 from a surface, 1 - tau/m from a medium point
         float s = fromSurface ? sqrt(1.0f - u) : 1.0f - u;
         return model.a.x * (1.0f - s);
+    }
+    if (model.type == kTrPulse && fromSurface) {
+        // T_ss = 1 - (2/n) (I(x) - 1/2), I piecewise linear with I(i) = i - i (i - 1) / (2n) at the
+        // integers (shared/transmittance.h, trPulseG): solve I(x) = 1/2 + n u / 2 on its piece.
+        float n = model.a.z, target = 0.5f + 0.5f * n * u;
+        float b2 = 2.0f * n + 1.0f;
+        float i = clamp(floor(0.5f * (b2 - sqrt(max(b2 * b2 - 8.0f * n * target, 0.0f)))), 0.0f, n - 1.0f);
+        float x = i + (target - (i - i * (i - 1.0f) / (2.0f * n))) / (1.0f - i / n);
+        return max(model.a.x + (x - 0.5f) * (model.a.y - model.a.x) / n, 0.0f);
     }
     if (model.type == kTrDoubleExponential) {
         float a = model.a.x, b = model.a.y;
