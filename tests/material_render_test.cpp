@@ -121,12 +121,15 @@ std::pair<std::vector<RegionMean>, RegionMean> expectedRegions(const Scene& s) {
 
 namespace {
 
-// The plate of `scene` (with overrides) against its directional albedo, and a control with one
-// parameter wrong rendered against the same answer, which must be rejected.
-void checkPlate(const std::string& scene, const std::vector<SceneOverride>& overrides,
-                const std::vector<SceneOverride>& wrongOverrides, uint32_t seed) {
+using ExpectedRegions = std::pair<std::vector<RegionMean>, RegionMean>;
+
+// `scene` with overrides against `expected` (computed from the scene as loaded), and the control:
+// the same scene with wrongOverrides against the same answer, which must be rejected.
+void checkAgainst(const std::string& scene, const std::vector<SceneOverride>& overrides,
+                  const std::vector<SceneOverride>& wrongOverrides, uint32_t seed,
+                  const std::function<ExpectedRegions(const Scene&)>& expected) {
     const Scene s = loadTestScene(scene, overrides);
-    const auto [blocks, image] = expectedRegions(s);
+    const auto [blocks, image] = expected(s);
     const Film film = renderFilm(s, 256, seed);
     EXPECT_EQ(film.nonFiniteSamples(), 0u);
     const ZSummary z = compareBlocksAndImage(film, blocks, image, 8);
@@ -141,6 +144,12 @@ void checkPlate(const std::string& scene, const std::vector<SceneOverride>& over
     std::printf("control %s %s=%s: %zu of %zu tests fail, worst %s\n", scene.c_str(), wrongOverrides[0].key.c_str(),
                 wrongOverrides[0].value.c_str(), c.failing, c.tests, c.worst.c_str());
     EXPECT_GT(c.failing, 0u) << scene << ": the test cannot see " << wrongOverrides[0].key << " = " << wrongOverrides[0].value;
+}
+
+// The plate of `scene` (with overrides) against its directional albedo.
+void checkPlate(const std::string& scene, const std::vector<SceneOverride>& overrides,
+                const std::vector<SceneOverride>& wrongOverrides, uint32_t seed) {
+    checkAgainst(scene, overrides, wrongOverrides, seed, [](const Scene& s) { return expectedRegions(s); });
 }
 
 }  // namespace
@@ -289,26 +298,11 @@ std::pair<std::vector<RegionMean>, RegionMean> regionsOf(const Scene& s,
     return {blocks, image};
 }
 
-// `scene` with overrides against the closed form `answer` (computed from the scene as loaded), and
-// the control: the same scene with wrongOverrides against the same answer, which must be rejected.
+// `scene` with overrides against the closed form `answer` (a function of the scene as loaded).
 void checkClosedForm(const std::string& scene, const std::vector<SceneOverride>& overrides,
                      const std::vector<SceneOverride>& wrongOverrides, uint32_t seed,
                      const std::function<std::function<glm::dvec3(glm::vec3)>(const Scene&)>& answer) {
-    const Scene s = loadTestScene(scene, overrides);
-    const auto [blocks, image] = regionsOf(s, answer(s));
-    const Film film = renderFilm(s, 256, seed);
-    EXPECT_EQ(film.nonFiniteSamples(), 0u);
-    const ZSummary z = compareBlocksAndImage(film, blocks, image, 8);
-    EXPECT_EQ(z.failing, 0u) << scene << ": " << z.worst << " (threshold " << z.threshold << ")";
-    const RegionMean got = imageMean(film);
-    std::printf("%s: image mean %.5f %.5f %.5f, expected %.5f %.5f %.5f, max |Z| %.2f\n", scene.c_str(), got.mean.x,
-                got.mean.y, got.mean.z, image.mean.x, image.mean.y, image.mean.z, z.maxAbsZ);
-    std::vector<SceneOverride> wrong = overrides;
-    wrong.insert(wrong.end(), wrongOverrides.begin(), wrongOverrides.end());
-    const ZSummary c = compareBlocksAndImage(renderFilm(loadTestScene(scene, wrong), 256, seed + 1), blocks, image, 8);
-    std::printf("control %s %s=%s: %zu of %zu tests fail, worst %s\n", scene.c_str(), wrongOverrides[0].key.c_str(),
-                wrongOverrides[0].value.c_str(), c.failing, c.tests, c.worst.c_str());
-    EXPECT_GT(c.failing, 0u) << scene << ": the test cannot see " << wrongOverrides[0].key << " = " << wrongOverrides[0].value;
+    checkAgainst(scene, overrides, wrongOverrides, seed, [&](const Scene& s) { return regionsOf(s, answer(s)); });
 }
 
 // Cosine-weighted hemispherical mean 2 int_0^1 g(mu) mu dmu (midpoint rule).

@@ -1,13 +1,12 @@
 // Loads libtelescope_vdb.so on first use (src/scene/vdb_file.h says why) and copies its result.
 #include "scene/vdb_file.h"
 
-#include <dlfcn.h>
-
-#include <filesystem>
 #include <mutex>
 #include <stdexcept>
 
 #include <fmt/format.h>
+
+#include "scene/plugin_loader.h"
 
 #ifndef TELESCOPE_VDB_PLUGIN_PATH
 #define TELESCOPE_VDB_PLUGIN_PATH ""
@@ -23,35 +22,19 @@ struct VdbPlugin {
     std::string error;
 };
 
-// Next to the executable (an installed telescope), then where the build put it.
 const VdbPlugin& plugin() {
     static VdbPlugin p;
     static std::once_flag once;
     std::call_once(once, [] {
-        std::vector<std::string> candidates;
-        std::error_code ec;
-        const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-        if (!ec) candidates.push_back((exe.parent_path() / "libtelescope_vdb.so").string());
-        if (*TELESCOPE_VDB_PLUGIN_PATH) candidates.push_back(TELESCOPE_VDB_PLUGIN_PATH);
-        std::string tried;
-        for (const std::string& path : candidates) {
-            if (!std::filesystem::exists(path, ec)) {
-                tried += (tried.empty() ? "" : ", ") + path;
-                continue;
-            }
-            void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-            if (!handle) {
-                const char* why = dlerror();
-                p.error = fmt::format("cannot load the OpenVDB module {}: {}", path, why ? why : "unknown error");
-                return;
-            }
-            p.read = reinterpret_cast<TelescopeVdbReadFn>(dlsym(handle, "telescopeVdbRead"));
-            p.release = reinterpret_cast<TelescopeVdbFreeFn>(dlsym(handle, "telescopeVdbFree"));
-            if (!p.read || !p.release) p.error = fmt::format("the OpenVDB module {} lacks its entry points", path);
+        const PluginHandle h = openPlugin(
+            {"libtelescope_vdb.so", TELESCOPE_VDB_PLUGIN_PATH, "the OpenVDB module", "read VDB files", "OpenVDB"});
+        if (!h.handle) {
+            p.error = h.error;
             return;
         }
-        p.error = fmt::format("this build of Telescope cannot read VDB files: its OpenVDB module "
-                              "libtelescope_vdb.so was not found (looked for {})", tried);
+        p.read = pluginSymbol<TelescopeVdbReadFn>(h, "telescopeVdbRead");
+        p.release = pluginSymbol<TelescopeVdbFreeFn>(h, "telescopeVdbFree");
+        if (!p.read || !p.release) p.error = fmt::format("the OpenVDB module {} lacks its entry points", h.path);
     });
     return p;
 }

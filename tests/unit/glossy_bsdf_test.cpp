@@ -16,6 +16,7 @@
 #include <random>
 
 #include "bsdf_stats.h"
+#include "test_materials.h"
 #include "render/gpu_scene.h"
 #include "shared/bsdf.h"
 
@@ -23,11 +24,6 @@ using namespace telescope::shader;
 using namespace telescope::test;
 
 namespace {
-
-vec3 fromAngle(float thetaDeg, float phiDeg = 30.0f) {
-    const float t = glm::radians(thetaDeg), p = glm::radians(phiDeg);
-    return vec3(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
-}
 
 MaterialGpu plastic(telescope::BsdfType type, float albedo, float ior, float tau, float roughness = 0.0f,
                     uint dist = kMicrofacetGGX) {
@@ -38,14 +34,6 @@ MaterialGpu plastic(telescope::BsdfType type, float albedo, float ior, float tau
     m.roughness = roughness;
     m.distribution = dist;
     m.sigmaA = vec3(tau);
-    return telescope::gpuMaterial(m);
-}
-
-MaterialGpu orenNayar(float albedo, float roughness) {
-    telescope::Material m;
-    m.type = telescope::BsdfType::OrenNayar;
-    m.albedo = vec3(albedo);
-    m.roughness = roughness;
     return telescope::gpuMaterial(m);
 }
 

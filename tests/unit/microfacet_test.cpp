@@ -14,6 +14,7 @@
 #include <random>
 
 #include "bsdf_stats.h"
+#include "test_materials.h"
 #include "shared/bsdf.h"
 #include "shared/microfacet.h"
 
@@ -24,11 +25,6 @@ namespace {
 
 constexpr uint kDists[] = {kMicrofacetBeckmann, kMicrofacetPhong, kMicrofacetGGX};
 const char* distName(uint d) { return d == kMicrofacetBeckmann ? "beckmann" : d == kMicrofacetPhong ? "phong" : "ggx"; }
-
-vec3 fromAngle(float thetaDeg, float phiDeg = 30.0f) {
-    const float t = glm::radians(thetaDeg), p = glm::radians(phiDeg);
-    return vec3(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
-}
 
 // A conductor whose Fresnel term is 1 at every angle: eta = 0, k = 1 (a perfect reflector).
 const vec3 kWhiteEta(0.0f), kWhiteK(1.0f);

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "bsdf_stats.h"
+#include "test_materials.h"
 #include "render/gpu_scene.h"
 #include "shared/bsdf.h"
 
@@ -61,11 +62,6 @@ MaterialGpu thinSheet(float ior, float thickness, vec3 sigmaA, bool interference
     m.sigmaA = sigmaA;
     m.enableInterference = interference;
     return telescope::gpuMaterial(m);
-}
-
-vec3 fromAngle(float thetaDeg, float phiDeg = 30.0f) {
-    const float t = glm::radians(thetaDeg), p = glm::radians(phiDeg);
-    return vec3(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
 }
 
 }  // namespace
@@ -203,14 +199,6 @@ Mixture mixture(MaterialGpu a, MaterialGpu b, float ratio, float albedo = 1.0f) 
 MaterialGpu roughConductor(float roughness) {
     telescope::Material m;
     m.type = telescope::BsdfType::RoughConductor;
-    m.roughness = roughness;
-    return telescope::gpuMaterial(m);
-}
-
-MaterialGpu orenNayar(float albedo, float roughness) {
-    telescope::Material m;
-    m.type = telescope::BsdfType::OrenNayar;
-    m.albedo = vec3(albedo);
     m.roughness = roughness;
     return telescope::gpuMaterial(m);
 }
