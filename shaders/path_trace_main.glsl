@@ -65,6 +65,8 @@ Prim scenePrim(uint i) {
 }
 #define BVH_NODE(i) sceneNode(i)
 #define BVH_PRIM(i) scenePrim(i)
+layout(constant_id = kSpecBruteForcePrims) const uint kBruteForcePrims = 0u;
+#define BVH_BRUTE_FORCE_PRIMS kBruteForcePrims
 #include "shared/intersect.h"
 #include "medium.glsl"
 #include "path_tracer.glsl"

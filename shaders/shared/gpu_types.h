@@ -165,6 +165,8 @@ CONST uint kSpecCameraMedium = 38u;      // medium index + 1, 0 = vacuum
 CONST uint kSpecHasGrids = 39u;
 CONST uint kSpecTrModel = 40u;           // the transmittance model every medium shares, or 0xffffffff
 CONST uint kSpecHasInhomogeneousMedia = 41u;  // a medium whose density varies (exponential or grid)
+CONST uint kSpecBruteForcePrims = 42u;   // n > 0: rays test the scene's n primitives in turn, no BVH
+CONST uint kMaxBruteForcePrims = 20u;     // the largest scene traced that way (break-even ~24: docs/BENCHMARKS.md)
 
 CONST uint kPathTraceGroupSize = 8u;  // 8x8 pixel tiles
 

@@ -6,7 +6,9 @@
 //   BVH_NODE(i)              the BvhNode i of the tree from buildBvh (src/scene/bvh.h),
 //   BVH_PRIM(i)              the Prim in leaf slot i (input primitives permuted by Bvh::order),
 //   kHasSpheres, kHasDisks   bool constants (specialisation constants in GLSL, true in C++),
-//   BVH_COUNT_NODE_VISIT()   optional: a statement run once per node entered (a test counter).
+//   BVH_COUNT_NODE_VISIT()   optional: a statement run once per node entered (a test counter),
+//   BVH_BRUTE_FORCE_PRIMS    optional: a constant n > 0 tests the n primitives one after the other
+//                            instead of walking the tree (tiny scenes; see kSpecBruteForcePrims).
 // Part 2 has internal linkage in C++, so each translation unit binds its own buffers.
 //
 // Rays are origin + t dir with dir non-zero (not necessarily unit); hits count for t strictly
@@ -160,6 +162,10 @@ SHADER_NAMESPACE_END
 #define BVH_COUNT_NODE_VISIT()
 #endif
 
+#ifndef BVH_BRUTE_FORCE_PRIMS
+#define BVH_BRUTE_FORCE_PRIMS 0u
+#endif
+
 #ifdef __cplusplus
 #define TRACE_FN static inline
 #else
@@ -193,6 +199,20 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
     hit.t = tMax;
     hit.prim = kNoPrim;
     hit.bary = vec2(0.0f);
+    if (BVH_BRUTE_FORCE_PRIMS > 0u) {
+        // Every primitive in turn: a loop of constant length over uniform data, with no stack.
+        for (uint i = 0u; i < BVH_BRUTE_FORCE_PRIMS; ++i) {
+            float t = 0.0f;
+            vec2 bary = vec2(0.0f);
+            if (intersectPrim(BVH_PRIM(i), origin, dir, 0.0f, hit.t, t, bary)) {
+                hit.t = t;
+                hit.prim = i;
+                hit.bary = bary;
+                if (anyHit) return true;
+            }
+        }
+        return hit.prim != kNoPrim;
+    }
     vec3 invDir = safeInverse(dir);
     uint stack[kBvhStackSize];
     float stackT[kBvhStackSize];

@@ -84,7 +84,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     }
 
     // ---- Feature switches folded into the pipeline ----
-    auto feature = [&](const char* name, bool on, const char* yes, const char* no) {
+    auto feature = [&](const char* name, bool on, const std::string& yes, const std::string& no) {
         plan.features.push_back({name, on, on ? yes : no});
     };
     feature("spheres", f.spheres, "sphere primitives present", "no sphere primitives");
@@ -121,6 +121,10 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
             f.media ? "every medium homogeneous: comb estimators are exact, their code folded out" : "no participating media");
     feature("uniform scene", f.fitsUniforms, "BVH nodes and primitives read from uniform buffers (faster loads)",
             "more than 2048 BVH nodes or 1024 primitives: read from storage buffers");
+    feature("brute-force rays", f.bruteForcePrims > 0u,
+            fmt::format("{} primitives tested in turn by every ray, no BVH walk", f.bruteForcePrims),
+            fmt::format("BVH traversal over {} primitives (brute force takes at most {}, in uniform buffers)",
+                        f.primCount, shader::kMaxBruteForcePrims));
 
     plan.featuresOf = "path_trace";
     // Scenes with glossy materials get the path tracer that has their code (path_trace_glossy.comp);
@@ -148,6 +152,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},
         {kSpecTestPmfWeight, gpu::specFloat(in.debias.testPmfWeight)},
         {kSpecSceneInUniforms, f.fitsUniforms},
+        {kSpecBruteForcePrims, f.bruteForcePrims},
         {kSpecBsdfFamilies, f.bsdfFamilies},
         {kSpecHasTextures, f.textures},
         {kSpecEnvironmentMap, f.environmentMap},
@@ -248,7 +253,7 @@ private:
     static std::vector<gpu::SpecConstant> deviceSpec(const gpu::Context& context, std::vector<gpu::SpecConstant> spec) {
         if (context.properties().limits.maxUniformBufferRange < shader::kUniformSceneBytes)
             for (auto& s : spec)
-                if (s.id == shader::kSpecSceneInUniforms) s.value = 0;
+                if (s.id == shader::kSpecSceneInUniforms || s.id == shader::kSpecBruteForcePrims) s.value = 0;
         return spec;
     }
 

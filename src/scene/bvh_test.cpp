@@ -17,6 +17,7 @@ namespace bvh_test {
 static std::vector<telescope::shader::BvhNode> nodes;
 static std::vector<telescope::shader::Prim> prims;
 static uint64_t nodeVisits = 0;
+static uint32_t bruteForcePrims = 0;  // > 0: the traversal's brute-force path (kSpecBruteForcePrims)
 }  // namespace bvh_test
 
 constexpr bool kHasSpheres = true;
@@ -24,6 +25,7 @@ constexpr bool kHasDisks = true;
 #define BVH_NODE(i) (::bvh_test::nodes.at(i))
 #define BVH_PRIM(i) (::bvh_test::prims.at(i))
 #define BVH_COUNT_NODE_VISIT() (++::bvh_test::nodeVisits)
+#define BVH_BRUTE_FORCE_PRIMS (::bvh_test::bruteForcePrims)
 #include "shared/intersect.h"
 
 namespace telescope {
@@ -523,6 +525,25 @@ TEST(Bvh, TraversalMatchesBruteForceInsideEnclosingPrimitives) {
         Random r(77 + maxLeafSize);
         Scene s = load(randomPrims(r, 1000, true), maxLeafSize);
         expectMatchesBruteForce(s, randomRays(r, 1000, s.prims));
+    }
+}
+
+// The shaders' path for tiny scenes (BVH_BRUTE_FORCE_PRIMS = the primitive count: every primitive
+// in leaf order, no tree) finds the same closest and any hits, and reports leaf slots as the
+// traversal does.
+TEST(Bvh, BruteForcePathMatchesBruteForce) {
+    for (int count : {1, 7, 20}) {
+        for (bool enclosing : {false, true}) {
+            SCOPED_TRACE(testing::Message() << count << " prims, enclosing " << enclosing);
+            Random r(500 + uint32_t(count) + (enclosing ? 1000u : 0u));
+            Scene s = load(randomPrims(r, count, enclosing), 4);
+            bvh_test::bruteForcePrims = uint32_t(bvh_test::prims.size());
+            const uint64_t visits = bvh_test::nodeVisits;
+            const int hits = expectMatchesBruteForce(s, randomRays(r, 1000, s.prims));
+            EXPECT_EQ(bvh_test::nodeVisits, visits) << "the brute-force path walked the tree";
+            EXPECT_GT(hits, 0);
+            bvh_test::bruteForcePrims = 0;
+        }
     }
 }
 
