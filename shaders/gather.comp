@@ -90,7 +90,7 @@ void main() {
     for (uint v = 1u; v <= kPhotonMaxBounces + 1u; ++v) {
         Hit hit;
         if (!traceClosest(origin, dir, kInfinity, hit)) break;
-        Prim pr = prims[hit.prim];
+        Prim pr = scenePrim(hit.prim);
         vec3 p, ng;
         hitPoint(pr, origin, dir, hit.t, p, ng);
         light += throughput * primEmission(pr, dir, ng);

@@ -11,6 +11,7 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 
 #include "shared/gpu_types.h"
 #include "shared/photon_density.h"
@@ -27,13 +28,16 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4ArrayRe
 
 #include "photon_gather.glsl"
 
-shared uint threadTotals[kGridGroupSize];
-shared uint threadMax[kGridGroupSize];
+// Per subgroup of the workgroup: its total and its largest count (at most one subgroup per thread).
+shared uint subgroupTotals[kGridGroupSize];
+shared uint subgroupMaxima[kGridGroupSize];
 
 uint threadCount() { return gl_NumWorkGroups.x * kGridGroupSize; }
 
-// Exclusive scan of one block of kScanBlock elements: 4 per thread, then the thread totals in
-// shared memory (Hillis-Steele), then the block total to sums[block].
+// Exclusive scan of one block of kScanBlock elements: 4 per thread, the thread totals scanned
+// within each subgroup (subgroupInclusiveAdd), then across the subgroups through shared memory
+// with one barrier (a Hillis-Steele scan over the 256 threads took 16 barriers, and on lavapipe
+// each barrier switches every invocation of the workgroup), then the block total to sums[block].
 void scanBlock() {
     UintArrayRef src = UintArrayRef(uvec2(pc.srcLo, pc.srcHi));
     UintArrayRef dst = UintArrayRef(uvec2(pc.dstLo, pc.dstHi));
@@ -45,30 +49,27 @@ void scanBlock() {
         v[k] = first + k < pc.count ? src.v[first + k] : 0u;
         total += v[k];
     }
-    threadTotals[t] = total;
-    threadMax[t] = max(max(v[0], v[1]), max(v[2], v[3]));
-    barrier();
-    for (uint offset = 1u; offset < kGridGroupSize; offset <<= 1u) {
-        uint add = t >= offset ? threadTotals[t - offset] : 0u;
-        barrier();
-        threadTotals[t] += add;
-        barrier();
+    uint inclusive = subgroupInclusiveAdd(total);
+    uint largest = subgroupMax(max(max(v[0], v[1]), max(v[2], v[3])));
+    if (gl_SubgroupInvocationID == gl_SubgroupSize - 1u) {
+        subgroupTotals[gl_SubgroupID] = inclusive;
+        subgroupMaxima[gl_SubgroupID] = largest;
     }
-    uint running = threadTotals[t] - total;  // exclusive prefix of this thread
+    barrier();
+    uint running = inclusive - total;  // exclusive prefix of this thread within its subgroup
+    for (uint k = 0u; k < gl_SubgroupID; ++k) running += subgroupTotals[k];
     for (uint k = 0u; k < 4u; ++k) {
         if (first + k < pc.count) dst.v[first + k] = running;
         running += v[k];
     }
     if (t == kGridGroupSize - 1u && (pc.sumsLo != 0u || pc.sumsHi != 0u))
-        UintArrayRef(uvec2(pc.sumsLo, pc.sumsHi)).v[gl_WorkGroupID.x] = threadTotals[t];
+        UintArrayRef(uvec2(pc.sumsLo, pc.sumsHi)).v[gl_WorkGroupID.x] = running;  // the block total
 
-    // ---- The fullest bucket: a tree reduction, one atomic per workgroup ----
-    if (pc.recordMax == 0u) return;
-    for (uint width = kGridGroupSize / 2u; width > 0u; width >>= 1u) {
-        if (t < width) threadMax[t] = max(threadMax[t], threadMax[t + width]);
-        barrier();
-    }
-    if (t == 0u) atomicMax(PhotonMapRef(uvec2(pc.headerLo, pc.headerHi)).h.maxBucket, threadMax[0]);
+    // ---- The fullest bucket: one atomic per workgroup ----
+    if (pc.recordMax == 0u || t != 0u) return;
+    uint fullest = 0u;
+    for (uint k = 0u; k < gl_NumSubgroups; ++k) fullest = max(fullest, subgroupMaxima[k]);
+    atomicMax(PhotonMapRef(uvec2(pc.headerLo, pc.headerHi)).h.maxBucket, fullest);
 }
 
 void main() {

@@ -1,6 +1,8 @@
 // Scene access shared by photon_trace.comp and gather.comp (GLSL only): the scene buffers, the
 // scene switches (same specialisation ids as path_trace), ray offsets, emission, light picking,
-// specular scattering, and the photon map reached by device address.
+// specular scattering, and the photon map reached by device address. Like the path tracer, the BVH
+// and primitives are read from uniform buffers when they fit (kSpecSceneInUniforms) and tiny scenes
+// skip the BVH (kSpecBruteForcePrims); the bindings keep the path tracer's numbers, 4-6 unused.
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
 
@@ -18,8 +20,23 @@ layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[
 layout(std430, binding = kBindingMaterials) readonly buffer MaterialBuffer { MaterialGpu materials[]; };
 layout(std430, binding = kBindingLights) readonly buffer LightBuffer { LightGpu lights[]; };
 
-#define BVH_NODE(i) nodes[i]
-#define BVH_PRIM(i) prims[i]
+layout(constant_id = kSpecSceneInUniforms) const bool kSceneInUniforms = false;
+layout(std140, binding = kBindingBvhUniform) uniform BvhUniform { BvhNode uniformNodes[kMaxUniformNodes]; };
+layout(std140, binding = kBindingPrimsUniform) uniform PrimUniform { Prim uniformPrims[kMaxUniformPrims]; };
+
+// (Functions, not ?: : the uniform and storage structs are distinct SPIR-V types.)
+BvhNode sceneNode(uint i) {
+    if (kSceneInUniforms) return uniformNodes[i];
+    return nodes[i];
+}
+Prim scenePrim(uint i) {
+    if (kSceneInUniforms) return uniformPrims[i];
+    return prims[i];
+}
+#define BVH_NODE(i) sceneNode(i)
+#define BVH_PRIM(i) scenePrim(i)
+layout(constant_id = kSpecBruteForcePrims) const uint kBruteForcePrims = 0u;
+#define BVH_BRUTE_FORCE_PRIMS kBruteForcePrims
 #include "shared/intersect.h"
 
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer PhotonMapRef { PhotonMapHeader h; };

@@ -6,6 +6,7 @@
 // max_bounces are not stored.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_ballot : require
 
 #include "shared/gpu_types.h"
 #include "shared/rng.h"
@@ -29,7 +30,7 @@ void emitPhoton(inout Rng rng, out vec3 origin, out vec3 dir, out vec3 power) {
         return;
     }
     // Area light of radiance L: flux pi A L, uniform points, cosine-distributed directions.
-    Prim pr = prims[light.prim];
+    Prim pr = scenePrim(light.prim);
     vec3 q, nq;
     sampleEmitterPoint(pr, kHasSpheres, kHasDisks, u1, u2, q, nq);
     dir = sampleCosineHemisphere(nq, u3, u4);
@@ -37,10 +38,15 @@ void emitPhoton(inout Rng rng, out vec3 origin, out vec3 dir, out vec3 power) {
     power = light.radiance * (kPi * pr.area / light.pmf) * pc.pathScale;
 }
 
-void storePhoton(PhotonMapRef map, vec3 p, vec3 wi, vec3 power) {
-    uint slot = atomicAdd(map.h.storedCount, 1u);
-    if (slot >= map.h.capacity) return;  // counted: the host grows the buffer and repeats the pass
-    PhotonArrayRef photons = PhotonArrayRef(uvec2(map.h.photonsLo, map.h.photonsHi));
+// The lanes of a subgroup that store at this vertex take consecutive slots reserved by ONE atomic on
+// the shared counter, not one atomic per photon: on lavapipe the counter's cache line moves between
+// the cores at every atomic, and the stores were half of this pass (docs/BENCHMARKS.md, photon notes).
+void storePhoton(PhotonMapRef map, PhotonArrayRef photons, uint capacity, vec3 p, vec3 wi, vec3 power) {
+    uvec4 lanes = subgroupBallot(true);
+    uint first = 0u;
+    if (subgroupElect()) first = atomicAdd(map.h.storedCount, subgroupBallotBitCount(lanes));
+    uint slot = subgroupBroadcastFirst(first) + subgroupBallotExclusiveBitCount(lanes);
+    if (slot >= capacity) return;  // counted: the host grows the buffer and repeats the pass
     photons.p[slot] = Photon(p, 0u, power, encodeDirection(wi));
 }
 
@@ -48,6 +54,8 @@ void main() {
     uint path = gl_GlobalInvocationID.y * pc.rowThreads + gl_GlobalInvocationID.x;
     if (path >= pc.pathCount || kLightCount == 0u) return;
     PhotonMapRef map = PhotonMapRef(uvec2(pc.headerLo, pc.headerHi));
+    PhotonArrayRef photons = PhotonArrayRef(uvec2(map.h.photonsLo, map.h.photonsHi));
+    uint capacity = map.h.capacity;
     uint seed = pc.seed ^ 0x5bd1e995u;
     if (pc.passInBlock != 0u) seed ^= pcgHash(pc.passInBlock);  // the passes of a block differ
     Rng rng = rngCreate(path, pc.pass, seed);
@@ -57,7 +65,7 @@ void main() {
     for (uint v = 1u; v <= kPhotonMaxBounces; ++v) {
         Hit hit;
         if (!traceClosest(origin, dir, kInfinity, hit)) return;
-        Prim pr = prims[hit.prim];
+        Prim pr = scenePrim(hit.prim);
         vec3 p, ng;
         hitPoint(pr, origin, dir, hit.t, p, ng);
         MaterialGpu m = materials[pr.material];
@@ -68,7 +76,7 @@ void main() {
         vec3 scale;
         if (m.type == kBsdfLambert) {
             if (!front && !kTwoSided) return;
-            if (!kNextEvent || v > 1u) storePhoton(map, p, -dir, power);
+            if (!kNextEvent || v > 1u) storePhoton(map, photons, capacity, p, -dir, power);
             dir = sampleCosineHemisphere(n, rngNext(rng), rngNext(rng));
             if (dot(dir, n) <= 0.0) return;
             scale = m.albedo;

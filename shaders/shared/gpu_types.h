@@ -125,7 +125,7 @@ CONST uint kPathTraceBindingCount = 11u;
 CONST uint kUniformSceneBytes = 65536u;  // maxUniformBufferRange on lavapipe; the Vulkan minimum is 16384
 CONST uint kMaxUniformNodes = 2048u;     // kUniformSceneBytes / sizeof(BvhNode)
 CONST uint kMaxUniformPrims = 1024u;     // kUniformSceneBytes / sizeof(Prim)
-CONST uint kSceneBindingCount = 4u;      // photon_trace and gather: the scene only (no media)
+CONST uint kSceneBindingCount = 9u;      // photon_trace and gather: the scene only (bindings 4-6, media, unused)
 
 // Specialisation constant ids: features a scene lacks are folded away by the compiler.
 CONST uint kSpecMaxBounces = 0u;
@@ -273,11 +273,18 @@ struct Photon {
 // photon it stores in storedCount, also those beyond capacity (which it drops): the host then
 // grows the buffers and repeats the pass, so no photon is ever lost.
 // maxBucket: the photons of the fullest bucket (written by the scan), which sets the gather's slices.
+// The two counters that shaders change with atomics have a 64-byte cache line of their own: next to
+// the fields every photon store reads (capacity, addresses), each atomic on one core made the
+// other core's next read of those fields a miss (lavapipe; the header is 128 bytes for that).
 struct PhotonMapHeader {
-    uint storedCount; uint capacity; uint tableSize; float cellSize;
+    uint capacity; uint tableSize; float cellSize; uint pad0;
     uint photonsLo; uint photonsHi; uint sortedLo; uint sortedHi;  // photons as stored, and in bucket order
     uint cellCountLo; uint cellCountHi; uint cellStartLo; uint cellStartHi;
-    uint maxBucket; uint pad0; uint pad1; uint pad2;
+    uint pad1; uint pad2; uint pad3; uint pad4;
+    uint storedCount; uint maxBucket; uint pad5; uint pad6;  // written by atomics: a cache line of their own
+    uint pad7; uint pad8; uint pad9; uint pad10;
+    uint pad11; uint pad12; uint pad13; uint pad14;
+    uint pad15; uint pad16; uint pad17; uint pad18;
 };
 
 struct PhotonTracePush {
@@ -330,7 +337,7 @@ struct GatherPush {
 SHADER_NAMESPACE_END
 #ifdef __cplusplus
 static_assert(sizeof(telescope::shader::Photon) == 32);
-static_assert(sizeof(telescope::shader::PhotonMapHeader) == 64);
+static_assert(sizeof(telescope::shader::PhotonMapHeader) == 128);
 static_assert(sizeof(telescope::shader::PhotonTracePush) == 32);
 static_assert(sizeof(telescope::shader::HashGridPush) == 64);
 static_assert(sizeof(telescope::shader::GatherPush) == 128);

@@ -88,6 +88,8 @@ int computeQueueFamily(VkPhysicalDevice pd) {
 
 DeviceInfo describe(VkPhysicalDevice pd, uint32_t index) {
     VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+    VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+    driver.pNext = &subgroup;
     VkPhysicalDeviceProperties2 props{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
     props.pNext = &driver;
     vkGetPhysicalDeviceProperties2(pd, &props);
@@ -106,6 +108,12 @@ DeviceInfo describe(VkPhysicalDevice pd, uint32_t index) {
     else if (computeQueueFamily(pd) < 0) d.whyNot = "no compute queue";
     else if (!f12.bufferDeviceAddress) d.whyNot = "no bufferDeviceAddress";
     else if (!features.features.shaderInt64) d.whyNot = "no shaderInt64";
+    // photon_trace reserves photon slots once per subgroup (ballot); the hash grid's scan adds
+    // within subgroups (arithmetic)
+    else if (!(subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) ||
+             !(subgroup.supportedOperations & VK_SUBGROUP_FEATURE_BALLOT_BIT) ||
+             !(subgroup.supportedOperations & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT))
+        d.whyNot = "no subgroup ballot and arithmetic in compute shaders";
     d.suitable = d.whyNot.empty();
     return d;
 }

@@ -55,6 +55,8 @@ public:
     VkCommandPool commandPool() const { return commandPool_; }
     const DeviceInfo& info() const { return info_; }
     const VkPhysicalDeviceProperties& properties() const { return properties_; }
+    // A CPU implementation (lavapipe): device memory is host memory, the mapping is the storage.
+    bool cpuDevice() const { return properties_.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU; }
     bool timestampsSupported() const { return timestampValidBits_ > 0; }
     float timestampPeriodNs() const { return properties_.limits.timestampPeriod; }
 

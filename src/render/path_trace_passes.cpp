@@ -177,8 +177,7 @@ public:
     PathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan, const RenderBuffers& b,
                     uint32_t seed)
         : pipeline_(context, plan.pathTraceShader, shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
-                    deviceSpec(context, plan.pathTraceSpec),
-                    (1u << shader::kBindingBvhUniform) | (1u << shader::kBindingPrimsUniform)) {
+                    deviceSceneSpec(context, plan.pathTraceSpec), kSceneUniformBindings) {
         pipeline_.bindBuffers(
             {b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims, b.textures,
              b.environment});
@@ -249,14 +248,6 @@ public:
     }
 
 private:
-    // The plan's constants, without the uniform scene on a device whose uniform buffers are smaller.
-    static std::vector<gpu::SpecConstant> deviceSpec(const gpu::Context& context, std::vector<gpu::SpecConstant> spec) {
-        if (context.properties().limits.maxUniformBufferRange < shader::kUniformSceneBytes)
-            for (auto& s : spec)
-                if (s.id == shader::kSpecSceneInUniforms || s.id == shader::kSpecBruteForcePrims) s.value = 0;
-        return spec;
-    }
-
     // ---- Queued level schedule: the level queue and its passes (gpu_types.h) ----
     void makeLevelQueue(gpu::Context& context, const RenderPlan& plan, uint64_t capacity) {
         if (capacity >= (uint64_t(1) << 27))

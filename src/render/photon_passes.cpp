@@ -134,6 +134,12 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
             "no mirror, dielectric or conductor materials");
     feature("next event", nee, "direct_lighting = next_event", "direct_lighting = photons: all light from photons");
     feature("debias", unbiased(in), "debias block: blocks of passes, K_r_b + correction", "no debias block: biased K_r");
+    feature("uniform scene", f.fitsUniforms, "BVH nodes and primitives read from uniform buffers (faster loads)",
+            "more than 2048 BVH nodes or 1024 primitives: read from storage buffers");
+    feature("brute-force rays", f.bruteForcePrims > 0u,
+            fmt::format("{} primitives tested in turn by every ray, no BVH walk", f.bruteForcePrims),
+            fmt::format("BVH traversal over {} primitives (brute force takes at most {}, in uniform buffers)",
+                        f.primCount, kMaxBruteForcePrims));
     plan.featuresOf = "photon_trace and gather";
 
     plan.photonSpec = {
@@ -149,6 +155,8 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         {kSpecPhotonSchedule, perPixel(in) ? kLevelSchedulePerPixel : kLevelScheduleUniform},
         {kSpecPhotonNextEvent, nee},
         {kSpecPhotonMaxBounces, in.maxBounces},
+        {kSpecSceneInUniforms, f.fitsUniforms},
+        {kSpecBruteForcePrims, f.bruteForcePrims},
     };
 }
 
@@ -164,15 +172,20 @@ public:
           seed_(seed),
           map_(context, scene.integrator.photon.photonCount),
           pipelines_(gpu::createComputePipelines(
-              context, {{"photon_trace", shader::kSceneBindingCount, uint32_t(sizeof(shader::PhotonTracePush)), plan.photonSpec},
-                        {"gather", shader::kSceneBindingCount, uint32_t(sizeof(shader::GatherPush)), plan.photonSpec}})),
+              context, {{"photon_trace", shader::kSceneBindingCount, uint32_t(sizeof(shader::PhotonTracePush)),
+                         deviceSceneSpec(context, plan.photonSpec), kSceneUniformBindings},
+                        {"gather", shader::kSceneBindingCount, uint32_t(sizeof(shader::GatherPush)),
+                         deviceSceneSpec(context, plan.photonSpec), kSceneUniformBindings}})),
           trace_(*pipelines_[0]),
           gather_(*pipelines_[1]),
           blockBuffer_(context, uint64_t(scene.camera.width) * scene.camera.height * shader::kGatherBlockVec4s * 16,
                        "gather blocks") {
         blockBuffer_.fill(0);
-        trace_.bindBuffers({b.prims, b.nodes, b.materials, b.lights});
-        gather_.bindBuffers({b.prims, b.nodes, b.materials, b.lights});
+        // Bindings 4-6 (media in the path tracer) are declared by neither shader: any buffer will do.
+        const std::vector<const gpu::Buffer*> bound{b.prims, b.nodes, b.materials, b.lights, b.lights,
+                                                    b.lights,  b.lights, b.nodes, b.prims};
+        trace_.bindBuffers(bound);
+        gather_.bindBuffers(bound);
         const Camera& cam = scene.camera;
         const uint32_t paths = scene.integrator.photon.photonCount;
         tracePush_.pathCount = paths;
@@ -283,6 +296,7 @@ public:
     }
 
 private:
+
     // The uniform schedule's blocks (per_pixel keeps its blocks in the gather's buffer).
     bool blocks() const { return unbiased(integrator_) && !perPixel(integrator_); }
 

@@ -41,6 +41,18 @@ void setPushCamera(Push& push, const Camera& cam) {
     push.planeDistance = shader::cameraPlaneDistance(cam.fovDegrees);
 }
 
+// A plan's specialisation constants for this device: without the uniform scene (and so without
+// brute-force rays, which read it) where uniform buffers are smaller than kUniformSceneBytes.
+inline std::vector<gpu::SpecConstant> deviceSceneSpec(const gpu::Context& context, std::vector<gpu::SpecConstant> spec) {
+    if (context.properties().limits.maxUniformBufferRange < shader::kUniformSceneBytes)
+        for (auto& s : spec)
+            if (s.id == shader::kSpecSceneInUniforms || s.id == shader::kSpecBruteForcePrims) s.value = 0;
+    return spec;
+}
+
+// The scene's uniform bindings (kBindingBvhUniform, kBindingPrimsUniform) of path_trace, photon_trace and gather.
+constexpr uint32_t kSceneUniformBindings = (1u << shader::kBindingBvhUniform) | (1u << shader::kBindingPrimsUniform);
+
 // Buffers the integrators read: the scene (bindings 0..3), the accumulation (by address) and the
 // media (path tracer only).
 struct RenderBuffers {
