@@ -134,10 +134,10 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
             "no mirror, dielectric or conductor materials");
     feature("next event", nee, "direct_lighting = next_event", "direct_lighting = photons: all light from photons");
     feature("debias", unbiased(in), "debias block: blocks of passes, K_r_b + correction", "no debias block: biased K_r");
-    feature("uniform scene", f.fitsUniforms, "BVH nodes and primitives read from uniform buffers (faster loads)",
+    feature("uniform scene", f.fitsUniforms, "photon_trace reads BVH nodes and primitives from uniform buffers",
             "more than 2048 BVH nodes or 1024 primitives: read from storage buffers");
     feature("brute-force rays", f.bruteForcePrims > 0u,
-            fmt::format("{} primitives tested in turn by every ray, no BVH walk", f.bruteForcePrims),
+            fmt::format("photon_trace tests the {} primitives in turn, no BVH walk", f.bruteForcePrims),
             fmt::format("BVH traversal over {} primitives (brute force takes at most {}, in uniform buffers)",
                         f.primCount, kMaxBruteForcePrims));
     plan.featuresOf = "photon_trace and gather";
@@ -174,8 +174,10 @@ public:
           pipelines_(gpu::createComputePipelines(
               context, {{"photon_trace", shader::kSceneBindingCount, uint32_t(sizeof(shader::PhotonTracePush)),
                          deviceSceneSpec(context, plan.photonSpec), kSceneUniformBindings},
+                        // Not in the gather: it traces one camera ray per pixel, and the uniform scene
+                        // made its photon loop slower (docs/BENCHMARKS.md, photon notes).
                         {"gather", shader::kSceneBindingCount, uint32_t(sizeof(shader::GatherPush)),
-                         deviceSceneSpec(context, plan.photonSpec), kSceneUniformBindings}})),
+                         deviceSceneSpec(context, plan.photonSpec, false), kSceneUniformBindings}})),
           trace_(*pipelines_[0]),
           gather_(*pipelines_[1]),
           blockBuffer_(context, uint64_t(scene.camera.width) * scene.camera.height * shader::kGatherBlockVec4s * 16,

@@ -42,9 +42,11 @@ void setPushCamera(Push& push, const Camera& cam) {
 }
 
 // A plan's specialisation constants for this device: without the uniform scene (and so without
-// brute-force rays, which read it) where uniform buffers are smaller than kUniformSceneBytes.
-inline std::vector<gpu::SpecConstant> deviceSceneSpec(const gpu::Context& context, std::vector<gpu::SpecConstant> spec) {
-    if (context.properties().limits.maxUniformBufferRange < shader::kUniformSceneBytes)
+// brute-force rays, which read it) where uniform buffers are smaller than kUniformSceneBytes, or
+// where the caller does not want it (uniformScene false).
+inline std::vector<gpu::SpecConstant> deviceSceneSpec(const gpu::Context& context, std::vector<gpu::SpecConstant> spec,
+                                                      bool uniformScene = true) {
+    if (!uniformScene || context.properties().limits.maxUniformBufferRange < shader::kUniformSceneBytes)
         for (auto& s : spec)
             if (s.id == shader::kSpecSceneInUniforms || s.id == shader::kSpecBruteForcePrims) s.value = 0;
     return spec;
