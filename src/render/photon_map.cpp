@@ -11,13 +11,12 @@ namespace {
 constexpr uint32_t kMaxTableSize = 1u << 24;
 constexpr uint64_t kMaxGroups = 4096;  // grid-stride loops cover the rest
 
-// Buckets hold cells, and a cell (2 r on a side) holds many photons wherever a gather finds a few:
-// a quarter of a bucket per photon of capacity keeps about one cell per bucket while cells average
-// 4 photons or more. Clearing and scanning the table is part of every pass; half a bucket per photon
-// cost 2x the clear, scan and add for no measured gain in the gather (docs/BENCHMARKS.md, photon notes).
+// Buckets hold cells, and cells hold several photons: half a bucket per photon of capacity. (A
+// quarter made the clear, scan and add of the point-light plane 2x cheaper, but the caustic Cornell
+// box's gather 5% slower, more than the grid gained: docs/BENCHMARKS.photon-notes.md.)
 uint32_t tableSizeFor(uint64_t capacity) {
     uint32_t t = 1024;
-    while (t < capacity / 4 && t < kMaxTableSize) t <<= 1;
+    while (t < capacity / 2 && t < kMaxTableSize) t <<= 1;
     return t;
 }
 uint32_t lo(VkDeviceAddress a) { return uint32_t(a); }
