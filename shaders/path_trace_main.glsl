@@ -48,26 +48,9 @@ layout(std430, binding = kBindingEnvironment) readonly buffer EnvironmentBuffer 
 #define ENV_DATA(i) envData[i]
 #include "shared/environment_map.h"
 
-layout(constant_id = kSpecSceneInUniforms) const bool kSceneInUniforms = false;
-layout(std140, binding = kBindingBvhUniform) uniform BvhUniform { BvhNode uniformNodes[kMaxUniformNodes]; };
-layout(std140, binding = kBindingPrimsUniform) uniform PrimUniform { Prim uniformPrims[kMaxUniformPrims]; };
-
 layout(push_constant) uniform Push { PathTracePush pc; };
 
-// (Functions, not ?: : the uniform and storage structs are distinct SPIR-V types.)
-BvhNode sceneNode(uint i) {
-    if (kSceneInUniforms) return uniformNodes[i];
-    return nodes[i];
-}
-Prim scenePrim(uint i) {
-    if (kSceneInUniforms) return uniformPrims[i];
-    return prims[i];
-}
-#define BVH_NODE(i) sceneNode(i)
-#define BVH_PRIM(i) scenePrim(i)
-layout(constant_id = kSpecBruteForcePrims) const uint kBruteForcePrims = 0u;
-#define BVH_BRUTE_FORCE_PRIMS kBruteForcePrims
-#include "shared/intersect.h"
+#include "scene_geometry.glsl"
 #include "medium.glsl"
 #include "path_tracer.glsl"
 

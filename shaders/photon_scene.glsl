@@ -20,24 +20,7 @@ layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[
 layout(std430, binding = kBindingMaterials) readonly buffer MaterialBuffer { MaterialGpu materials[]; };
 layout(std430, binding = kBindingLights) readonly buffer LightBuffer { LightGpu lights[]; };
 
-layout(constant_id = kSpecSceneInUniforms) const bool kSceneInUniforms = false;
-layout(std140, binding = kBindingBvhUniform) uniform BvhUniform { BvhNode uniformNodes[kMaxUniformNodes]; };
-layout(std140, binding = kBindingPrimsUniform) uniform PrimUniform { Prim uniformPrims[kMaxUniformPrims]; };
-
-// (Functions, not ?: : the uniform and storage structs are distinct SPIR-V types.)
-BvhNode sceneNode(uint i) {
-    if (kSceneInUniforms) return uniformNodes[i];
-    return nodes[i];
-}
-Prim scenePrim(uint i) {
-    if (kSceneInUniforms) return uniformPrims[i];
-    return prims[i];
-}
-#define BVH_NODE(i) sceneNode(i)
-#define BVH_PRIM(i) scenePrim(i)
-layout(constant_id = kSpecBruteForcePrims) const uint kBruteForcePrims = 0u;
-#define BVH_BRUTE_FORCE_PRIMS kBruteForcePrims
-#include "shared/intersect.h"
+#include "scene_geometry.glsl"
 
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer PhotonMapRef { PhotonMapHeader h; };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer PhotonArrayRef { Photon p[]; };
