@@ -8,6 +8,7 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#define TELESCOPE_INT64  // shared/sampling.h: curvePosition
 
 #include "shared/gpu_types.h"
 #include "shared/rng.h"
@@ -22,44 +23,27 @@ layout(push_constant) uniform Push { PhotonTracePush pc; };
 // Path i of N takes a uniform point T of the stretch [i, i + 1) 2^32 / N of the 32-bit positions
 // of a Z-order (Morton) curve through the unit square (point lights: the direction) or the unit
 // 4-cube (area lights: position and direction); the curve's cell of T, jittered uniformly, gives
-// the emission's random numbers. Over the N paths of a pass the T are exactly uniform on
-// [0, 2^32), so the pass's photons are a stratified sample of the emitted light: the estimate stays
-// unbiased (power Phi / N each) and varies less. The point of it is order: consecutive paths leave
-// in nearby directions from nearby points, so the photons a SIMD group stores land near each other
-// and the hash grid's count and scatter touch nearby buckets and memory (docs/BENCHMARKS.md,
-// photon notes), where independent directions made every access random.
-uint curvePosition(uint path, inout Rng rng) {
-    uint64_t t = (uint64_t(path) << 32u) | uint64_t(rngNextUint(rng));
-    return uint(t / uint64_t(pc.pathCount));
-}
-uint oddBits2(uint x) {  // bits 0, 2, 4, ... of x, packed
-    x &= 0x55555555u;
-    x = (x ^ (x >> 1u)) & 0x33333333u;
-    x = (x ^ (x >> 2u)) & 0x0f0f0f0fu;
-    x = (x ^ (x >> 4u)) & 0x00ff00ffu;
-    return (x ^ (x >> 8u)) & 0x0000ffffu;
-}
-uint everyFourthBit(uint x) {  // bits 0, 4, 8, ... of x, packed
-    x &= 0x11111111u;
-    x = (x ^ (x >> 3u)) & 0x03030303u;
-    x = (x ^ (x >> 6u)) & 0x000f000fu;
-    return (x ^ (x >> 12u)) & 0x000000ffu;
-}
-
+// the emission's random numbers (shared/sampling.h). Over the N paths of a pass the T are exactly
+// uniform on [0, 2^32), so the pass's photons are a stratified sample of the emitted light: the
+// estimate stays unbiased (power Phi / N each) and varies less. The point of it is order:
+// consecutive paths leave in nearby directions from nearby points, so the photons a SIMD group
+// stores land near each other and the hash grid's count and scatter touch nearby buckets and
+// memory (docs/BENCHMARKS.photon-notes.md), where independent directions made every access random.
+//
 // Emission: origin, direction and power of a photon leaving a light picked by power.
 void emitPhoton(uint path, inout Rng rng, out vec3 origin, out vec3 dir, out vec3 power) {
     uint li = pickLight(rngNext(rng));
     LightGpu light = lights[li];
-    uint t = curvePosition(path, rng);
+    uint t = curvePosition(path, pc.pathCount, rngNextUint(rng));
     float u1, u2, u3 = 0.0, u4 = 0.0;
     if (light.type == kLightPoint) {
-        u1 = (float(oddBits2(t)) + rngNext(rng)) * (1.0 / 65536.0);
-        u2 = (float(oddBits2(t >> 1u)) + rngNext(rng)) * (1.0 / 65536.0);
+        u1 = (float(curveCoordinate2(t, 0u)) + rngNext(rng)) * (1.0 / 65536.0);
+        u2 = (float(curveCoordinate2(t, 1u)) + rngNext(rng)) * (1.0 / 65536.0);
     } else {
-        u1 = (float(everyFourthBit(t)) + rngNext(rng)) * (1.0 / 256.0);
-        u2 = (float(everyFourthBit(t >> 1u)) + rngNext(rng)) * (1.0 / 256.0);
-        u3 = (float(everyFourthBit(t >> 2u)) + rngNext(rng)) * (1.0 / 256.0);
-        u4 = (float(everyFourthBit(t >> 3u)) + rngNext(rng)) * (1.0 / 256.0);
+        u1 = (float(curveCoordinate4(t, 0u)) + rngNext(rng)) * (1.0 / 256.0);
+        u2 = (float(curveCoordinate4(t, 1u)) + rngNext(rng)) * (1.0 / 256.0);
+        u3 = (float(curveCoordinate4(t, 2u)) + rngNext(rng)) * (1.0 / 256.0);
+        u4 = (float(curveCoordinate4(t, 3u)) + rngNext(rng)) * (1.0 / 256.0);
     }
     // (float rounding can give 1.0 in the last cell: keep every u below 1)
     const float kBelowOne = 0.99999994;

@@ -25,6 +25,33 @@ FN vec3 sampleCosineHemisphere(vec3 n, float u1, float u2) {
     return normalize(t * (r * cos(phi)) + b * (r * sin(phi)) + n * z);
 }
 
+// ---- Stratified emission along a Z-order curve (photon_trace.comp) ----
+// Path `path` of `count` takes T = floor((path 2^32 + random) / count), random a uniform 32-bit
+// word: over the count paths the numerator covers [0, count 2^32) once, so T is exactly uniform on
+// [0, 2^32) while path i keeps to the stretch [i, i + 1) 2^32 / count. (64-bit, once per path;
+// GLSL shaders that use it define TELESCOPE_INT64 after enabling the int64 extension.)
+#if defined(__cplusplus) || defined(TELESCOPE_INT64)
+FN uint curvePosition(uint path, uint count, uint random) {
+    return uint(((uint64_t(path) << 32u) | uint64_t(random)) / uint64_t(count));
+}
+#endif
+
+// The Z-order curve's cell of T: bits 0, 2, 4, ... (axis 0) or 1, 3, 5, ... (axis 1) packed into 16
+// bits for the unit square, bits a, a + 4, a + 8, ... packed into 8 bits for axis a of the 4-cube.
+FN uint curveCoordinate2(uint t, uint axis) {
+    uint x = (t >> axis) & 0x55555555u;
+    x = (x ^ (x >> 1u)) & 0x33333333u;
+    x = (x ^ (x >> 2u)) & 0x0f0f0f0fu;
+    x = (x ^ (x >> 4u)) & 0x00ff00ffu;
+    return (x ^ (x >> 8u)) & 0x0000ffffu;
+}
+FN uint curveCoordinate4(uint t, uint axis) {
+    uint x = (t >> axis) & 0x11111111u;
+    x = (x ^ (x >> 3u)) & 0x03030303u;
+    x = (x ^ (x >> 6u)) & 0x000f000fu;
+    return (x ^ (x >> 12u)) & 0x000000ffu;
+}
+
 // Uniform direction on the sphere; pdf = 1 / (4 pi).
 FN vec3 sampleUniformSphere(float u1, float u2) {
     float z = 1.0f - 2.0f * u1;

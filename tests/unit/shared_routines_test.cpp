@@ -1,11 +1,14 @@
 // The routines every pass shares (shaders/shared): the camera (camera.h), specular scattering
-// (bsdf.h), points on emitters (emitter.h), the film's sample sums (sample_sums.h) and the level
+// (bsdf.h), points on emitters (emitter.h), the photons' stratified emission (sampling.h), the film's sample sums (sample_sums.h) and the level
 // pmf truncated to a cap (level_pmf.h), run on the CPU exactly as the shaders run them. The
 // statistical checks use fixed seeds and binomial or chi-square bounds, and each has a control
 // that the same bound rejects.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "shared/bsdf.h"
@@ -15,6 +18,7 @@
 #include "shared/level_pmf.h"
 #include "shared/rng.h"
 #include "shared/sample_sums.h"
+#include "shared/sampling.h"
 
 using namespace telescope::shader;
 
@@ -344,4 +348,48 @@ TEST(SharedDensityGrid, TrilinearBetweenVoxelCentres) {
     EXPECT_NEAR(at(vec3(0.375f, 0.5f, 0.625f)), 0.25f + 1.0f + 4.0f * 0.75f, 1e-5f);
     EXPECT_NEAR(at(vec3(0.0f, 0.0f, 1.0f)), 4.0f, 1e-6f);      // clamped at the faces
     EXPECT_EQ(at(vec3(1.01f, 0.5f, 0.5f)), -1.0f);             // outside the box
+}
+
+// ---- Stratified photon emission (sampling.h: curvePosition, curveCoordinate2/4) ----
+
+// The paths' stretches of the curve tile [0, 2^32): path 0 starts at 0, the last ends at 2^32 - 1,
+// and each path starts where the one before ended (or one further on). With this, the N 2^32
+// numerators map onto every T exactly N times, so T is uniform over the pass.
+TEST(SharedCurveEmission, PathStretchesTileTheCurve) {
+    for (uint n : {1u, 3u, 7u, 1000u, 1u << 20, (1u << 24) + 1u}) {
+        EXPECT_EQ(curvePosition(0u, n, 0u), 0u) << n;
+        EXPECT_EQ(curvePosition(n - 1u, n, 0xffffffffu), 0xffffffffu) << n;
+        const uint step = std::max(1u, n / 997u);
+        for (uint i = 0; i + 1 < n; i += step) {
+            const uint end = curvePosition(i, n, 0xffffffffu), next = curvePosition(i + 1u, n, 0u);
+            ASSERT_TRUE(next == end || next == end + 1u) << "n " << n << " path " << i;
+            ASSERT_LE(curvePosition(i, n, 0u), end);
+        }
+    }
+    // Control: a stretch computed with one random bit too few leaves gaps the check sees.
+    const uint n = 1000u, i = 417u;
+    const uint end = uint(((uint64_t(i) << 32u) | uint64_t(0x7fffffffu)) / n);
+    EXPECT_GT(curvePosition(i + 1u, n, 0u), end + 1u);
+}
+
+// The cell coordinates are the curve's de-interleaved bits: re-interleaving gives T back, so
+// distinct curve positions are distinct cells (a bijection of [0, 2^32) onto 2^16 x 2^16 and 2^8^4).
+TEST(SharedCurveEmission, CellCoordinatesDeinterleaveTheCurve) {
+    Rng rng = rngCreate(11, 12, 13);
+    for (int k = 0; k < 100000; ++k) {
+        const uint t = k < 4 ? std::array<uint, 4>{0u, 1u, 0xffffffffu, 0x80000000u}[k] : rngNextUint(rng);
+        uint two = 0u, four = 0u;
+        for (uint b = 0; b < 16; ++b)
+            for (uint axis = 0; axis < 2; ++axis) two |= ((curveCoordinate2(t, axis) >> b) & 1u) << (2u * b + axis);
+        for (uint b = 0; b < 8; ++b)
+            for (uint axis = 0; axis < 4; ++axis) four |= ((curveCoordinate4(t, axis) >> b) & 1u) << (4u * b + axis);
+        ASSERT_EQ(two, t) << k;
+        ASSERT_EQ(four, t) << k;
+        ASSERT_LT(curveCoordinate2(t, 1u), 65536u);
+        ASSERT_LT(curveCoordinate4(t, 3u), 256u);
+    }
+    // Neighbours along the curve share their cell but for the lowest bits: T and T + 1 from an even
+    // T differ in axis 0 only.
+    EXPECT_EQ(curveCoordinate2(6u, 0u) + 1u, curveCoordinate2(7u, 0u));
+    EXPECT_EQ(curveCoordinate2(6u, 1u), curveCoordinate2(7u, 1u));
 }
