@@ -69,7 +69,7 @@ void emitPhoton(uint path, inout Rng rng, out vec3 origin, out vec3 dir, out vec
 
 // The lanes of a subgroup that store at this vertex take consecutive slots reserved by ONE atomic on
 // the shared counter, not one atomic per photon: on lavapipe the counter's cache line moves between
-// the cores at every atomic, and the stores were half of this pass (docs/BENCHMARKS.md, photon notes).
+// the cores at every atomic; the stores were a third to a half of this pass (docs/BENCHMARKS.photon-notes.md).
 void storePhoton(PhotonMapRef map, PhotonArrayRef photons, uint capacity, vec3 p, vec3 wi, vec3 power) {
     uvec4 lanes = subgroupBallot(true);
     uint first = 0u;

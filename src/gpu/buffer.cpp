@@ -2,10 +2,10 @@
 
 #include <cstdint>
 #include <cstring>
-
-#include <sys/mman.h>
 #include <stdexcept>
 #include <utility>
+
+#include <sys/mman.h>
 
 #include <fmt/format.h>
 
@@ -19,7 +19,7 @@ namespace {
 // On a CPU device the mapping is the memory the shaders read and write. Large buffers written at
 // random (the photon map: photon stores, bucket counts, the scatter into bucket order) spend much
 // of their time in TLB misses on 4 KiB pages; transparent huge pages (2 MiB) remove most of them
-// (measured on lavapipe: photon_trace and hash_grid_build, docs/BENCHMARKS.md). Only advice: where
+// (measured on lavapipe: photon_trace and hash_grid_build, docs/BENCHMARKS.photon-notes.md). Only advice: where
 // the kernel has transparent huge pages off, or the range is not ordinary anonymous memory,
 // madvise fails and nothing changes.
 void adviseHugePages(void* mapped, VkDeviceSize bytes) {

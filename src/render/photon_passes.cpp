@@ -175,7 +175,7 @@ public:
               context, {{"photon_trace", shader::kSceneBindingCount, uint32_t(sizeof(shader::PhotonTracePush)),
                          deviceSceneSpec(context, plan.photonSpec), kSceneUniformBindings},
                         // Not in the gather: it traces one camera ray per pixel, and the uniform scene
-                        // made its photon loop slower (docs/BENCHMARKS.md, photon notes).
+                        // made its photon loop slower (docs/BENCHMARKS.photon-notes.md).
                         {"gather", shader::kSceneBindingCount, uint32_t(sizeof(shader::GatherPush)),
                          deviceSceneSpec(context, plan.photonSpec, false), kSceneUniformBindings}})),
           trace_(*pipelines_[0]),
@@ -298,7 +298,6 @@ public:
     }
 
 private:
-
     // The uniform schedule's blocks (per_pixel keeps its blocks in the gather's buffer).
     bool blocks() const { return unbiased(integrator_) && !perPixel(integrator_); }
 
