@@ -1,8 +1,9 @@
 // Scene access shared by photon_trace.comp and gather.comp (GLSL only): the scene buffers, the
 // scene switches (same specialisation ids as path_trace), ray offsets, emission, light picking,
-// specular scattering, and the photon map reached by device address. Like the path tracer, the BVH
-// and primitives are read from uniform buffers when they fit (kSpecSceneInUniforms) and tiny scenes
-// skip the BVH (kSpecBruteForcePrims); the bindings keep the path tracer's numbers, 4-6 unused.
+// specular scattering, and the photon map reached by device address. The geometry comes through
+// scene_geometry.glsl: photon_trace reads it from uniform buffers when it fits and skips the BVH in
+// tiny scenes, as the path tracer does; the host turns both off for the gather (measured slower
+// there). The bindings keep the path tracer's numbers, 4-6 unused.
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
 
