@@ -17,6 +17,7 @@
 #include "shared/camera.h"
 #include "shared/photon_density.h"
 #include "photon_scene.glsl"
+layout(binding = kBindingSortedTexels) uniform usamplerBuffer sortedTexels;
 #include "photon_gather.glsl"
 #include "accumulate.glsl"
 

@@ -26,6 +26,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer PhotonArray
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer UintArrayRef { uint v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4ArrayRef { vec4 v[]; };
 
+layout(binding = 0) uniform usamplerBuffer sortedTexels;  // the only binding of every stage
 #include "photon_gather.glsl"
 
 // Per subgroup of the workgroup: its total and its largest count (at most one subgroup per thread).

@@ -8,6 +8,20 @@
 // sliceBegin + kGatherSlicePhotons - 1 of each bucket (at most 8 x 4096 iterations); the caller
 // runs as many slices (dispatches) as the fullest bucket needs (PhotonMapHeader::maxBucket) and
 // adds their sums.
+//
+// The sorted photons are read as texels of 4 x uint32 (photon i is texels 2i and 2i + 1) through
+// a uniform texel buffer, which the including shader declares as `sortedTexels`. Lavapipe fetches
+// a divergent texel with vector loads, where a divergent load from a storage buffer or an address
+// loops over the lanes once per component: the gather is 2.8x faster (docs/BENCHMARKS.photon-notes.md).
+// A sorted array larger than the device lets a texel buffer be is read by address instead: a
+// pipeline of its own (kSpecSortedTexels = 0), since a choice made at run time in the loop cost
+// the texels' whole gain.
+layout(constant_id = kSpecSortedTexels) const bool kSortedTexels = true;
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Uvec4ArrayRef { uvec4 v[]; };
+
+uvec4 sortedTexel(Uvec4ArrayRef sorted, uint t) {
+    return kSortedTexels ? texelFetch(sortedTexels, int(t)) : sorted.v[t];
+}
 
 struct GatherSums {
     vec3 base;        // sum Phi_i W_{r_b}
@@ -25,7 +39,7 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
     s.found = 0u;
     float cellSize = map.h.cellSize;
     uint tableSize = map.h.tableSize;
-    PhotonArrayRef sorted = PhotonArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
+    Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
     UintArrayRef cellCount = UintArrayRef(uvec2(map.h.cellCountLo, map.h.cellCountHi));
     UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
     float rj2 = rb2 * exp(logRadius2);
@@ -47,11 +61,12 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
         for (uint i = first; i < last; ++i) {
             // The position first: most photons of the cells lie beyond r_b, and the rest of the
             // photon is read only for those within (measured 7% faster than reading it whole).
-            vec3 d = x - sorted.p[i].position;
+            vec3 d = x - uintBitsToFloat(sortedTexel(sorted, 2u * i).xyz);
             float d2 = dot(d, d);
             if (!(d2 < rb2)) continue;
-            if (dot(decodeDirection(sorted.p[i].direction), n) <= 0.0) continue;
-            vec3 power = sorted.p[i].power;
+            uvec4 rest = sortedTexel(sorted, 2u * i + 1u);  // power, direction
+            if (dot(decodeDirection(rest.w), n) <= 0.0) continue;
+            vec3 power = uintBitsToFloat(rest.xyz);
             s.found += 1u;
             s.base += power * kernelWeight(kernel, d2, rb2);
             if (difference && d2 < rj2) s.difference += power * kernelDifference(kernel, d2, rj2, logStep2);

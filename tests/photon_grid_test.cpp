@@ -50,9 +50,10 @@ Sums bruteForce(const std::vector<Photon>& photons, glm::vec3 x, glm::vec3 n, fl
 }
 
 // Photons in a cube of side `size` centred at the origin; queries at photons (displaced by up to
-// the radius) and at random points.
+// the radius) and at random points. byAddress: the gather reads the sorted photons by address, as
+// it does when they exceed the device's texel-buffer limit (else through the texel binding).
 void compareWithBruteForce(uint32_t photonCount, float size, float radius, uint32_t kernel, uint32_t queryCount,
-                           uint32_t seed) {
+                           uint32_t seed, bool byAddress = false) {
     Rng rng = rngCreate(seed, 1, 2);
     std::vector<Photon> photons(photonCount);
     for (Photon& p : photons) {
@@ -73,7 +74,7 @@ void compareWithBruteForce(uint32_t photonCount, float size, float radius, uint3
 
     PhotonMap map(sharedContext(), photonCount);
     map.uploadPhotons(photons, 2.0f * radius);
-    std::vector<glm::vec4> got = map.query(xs, ns, radius, logRadius2, logStep2, kernel);
+    std::vector<glm::vec4> got = map.query(xs, ns, radius, logRadius2, logStep2, kernel, byAddress);
     ASSERT_EQ(got.size(), queryCount);
     uint32_t nonEmpty = 0;
     for (uint32_t i = 0; i < queryCount; ++i) {
@@ -121,4 +122,11 @@ TEST_F(PhotonGrid, CrowdedCellsMatchBruteForce) {
     // per cell), and the counts and sums must equal the brute-force gather.
     compareWithBruteForce(1000000, 1.0f, 1.0f, kKernelCone, 32, 29);
     compareWithBruteForce(300000, 1.0f, 0.5f, kKernelEpanechnikov, 32, 31);
+}
+
+TEST_F(PhotonGrid, ReadingPhotonsByAddressMatchesBruteForce) {
+    // The gather's other way to the sorted photons (kSpecSortedTexels = 0), for photon maps larger
+    // than a texel buffer may be: sparse and crowded cells.
+    for (float radius : {1e-2f, 0.3f}) compareWithBruteForce(20000, 10.0f, radius, kKernelCone, 256, 37, true);
+    compareWithBruteForce(300000, 1.0f, 0.5f, kKernelEpanechnikov, 32, 41, true);
 }

@@ -12,12 +12,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 #include <vector>
 
 #include <fmt/format.h>
 
 #include "region_stats.h"
+#include "render/photon_map.h"
+#include "render/renderer.h"
 #include "render_harness.h"
 #include "shared/photon_density.h"
 
@@ -321,4 +324,46 @@ TEST_F(PhotonRender, CausticCornellBoxAgreesWithThePathTracer) {
         EXPECT_NEAR(imageA[c], imageB[c], 0.04 * imageB[c]) << "channel " << c;
         EXPECT_NEAR(causticA[c], causticB[c], 0.08 * causticB[c]) << "channel " << c;
     }
+}
+
+TEST_F(PhotonRender, PhotonsReadByAddressGiveTheSameFilm) {
+    // The gather reads the sorted photons through a texel buffer, or by address when they exceed
+    // the device's texel-buffer limit (a gather pipeline of its own, swapped in when the photon map
+    // grows past the limit). With the limit lowered to the first pass's capacity, the photon map
+    // outgrows it in the first pass (the caustic Cornell box stores more photons than it emits
+    // paths), so the gather must switch; the film must equal the one read through texels, but for
+    // the order in which the scatter's atomics leave each bucket's photons (float rounding).
+    const uint32_t paths = 20000;
+    Scene scene = loadTestScene("scenes/cornell-box-caustic.json", {{"camera.resolution", "[32,32]"},
+                                                                    {"integrator.debias", "null"},
+                                                                    {"integrator.direct_lighting", R"("photons")"},
+                                                                    {"integrator.photon_count", std::to_string(paths)},
+                                                                    {"integrator.gather_radius", "0.05"}});
+    Renderer texels(sharedContext(), scene, 900);
+    RenderRequest request;
+    request.spp = 3;
+    texels.render(request);
+    ASSERT_GT(texels.stats().photonsStored, uint64_t(3 * paths)) << "the photon map must outgrow its first capacity";
+
+    const std::string limit = std::to_string(2 * paths);  // texels of `paths` photons
+    ASSERT_EQ(setenv("TELESCOPE_MAX_TEXELS", limit.c_str(), 1), 0);
+    {
+        PhotonMap map(sharedContext(), paths);  // the limit is what sends the grown map to addresses
+        EXPECT_TRUE(map.texelsFit());
+        map.reserve(paths + 1);
+        EXPECT_FALSE(map.texelsFit());
+    }
+    Renderer byAddress(sharedContext(), scene, 900);
+    byAddress.render(request);
+    unsetenv("TELESCOPE_MAX_TEXELS");
+
+    const Film a = texels.film(), b = byAddress.film();
+    ASSERT_EQ(a.pixelCount(), b.pixelCount());
+    size_t lit = 0;
+    for (size_t i = 0; i < a.pixelCount(); ++i) {
+        const glm::dvec3 x = a.mean(shader::kChannelEstimate, i), y = b.mean(shader::kChannelEstimate, i);
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(x[c], y[c], 1e-5 * std::abs(x[c]) + 1e-12) << "pixel " << i << " channel " << c;
+        lit += x.x > 0.0;
+    }
+    EXPECT_GT(lit, a.pixelCount() / 2);
 }

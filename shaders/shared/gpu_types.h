@@ -232,7 +232,8 @@ static_assert(sizeof(telescope::shader::PathTracePush) == 104);
 // ---- Photon mapping passes (photon_trace, hash_grid_build, gather; docs/ESTIMATORS.md section 3) ----
 // Specialisation ids 48..63 (32..47 belong to participating media). The photon passes also take
 // the scene switches of the path tracer (kSpecHasSpheres ... kSpecRayEpsilon, same ids). Every
-// photon buffer is reached by device address, so none is bound by the 128 MiB binding limit.
+// photon buffer is reached by device address, so none is bound by the 128 MiB binding limit; the
+// gather also binds the sorted photons as a texel buffer (photon_gather.glsl).
 SHADER_NAMESPACE_BEGIN
 
 CONST uint kSpecPhotonEstimator = 48u;   // kPhotonBiased or kPhotonUnbiased
@@ -241,6 +242,7 @@ CONST uint kSpecPhotonSchedule = 50u;    // kLevelSchedulePerPixel or kLevelSche
 CONST uint kSpecPhotonNextEvent = 53u;   // direct light by next-event estimation, not photons
 CONST uint kSpecGridStage = 54u;         // hash_grid_build: which stage this pipeline runs
 CONST uint kSpecPhotonMaxBounces = 55u;  // scattering vertices of a photon path / camera chain
+CONST uint kSpecSortedTexels = 56u;      // gatherPhotons reads the sorted photons as texels (1) or by address (0)
 
 
 
@@ -250,6 +252,11 @@ CONST uint kGridStageScan = 2u;     // exclusive scan of 1024-element blocks, bl
 CONST uint kGridStageAdd = 3u;      // adds the scanned block totals back
 CONST uint kGridStageScatter = 4u;  // sorted[cellStart[h]++] = photon (a copy, read in order by the gather)
 CONST uint kGridStageQuery = 5u;    // kernel sums at query points (tests)
+
+// The gather's bindings: the scene's (kSceneBindingCount), then the sorted photons as a uniform
+// texel buffer (photon_gather.glsl).
+CONST uint kBindingSortedTexels = 9u;
+CONST uint kGatherBindingCount = 10u;
 
 CONST uint kPhotonTraceGroupSize = 64u;
 CONST uint kGridGroupSize = 256u;

@@ -1,6 +1,8 @@
 #include "gpu/buffer.h"
 
+#include <algorithm>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 #include <utility>
@@ -44,7 +46,8 @@ Buffer::Buffer(const Context& context, VkDeviceSize size, std::string name)
         VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
         info.size = size;
         info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
-                     VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
+                     VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT |
+                     VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT;
         info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
         VK_CHECK(vkCreateBuffer(device, &info, nullptr, &buffer_));
 
@@ -96,6 +99,7 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
         size_ = std::exchange(o.size_, 0);
         address_ = std::exchange(o.address_, 0);
         mapped_ = std::exchange(o.mapped_, nullptr);
+        texelView_ = std::exchange(o.texelView_, VK_NULL_HANDLE);
         mappedCached_ = std::exchange(o.mappedCached_, false);
         name_ = std::move(o.name_);
     }
@@ -105,11 +109,36 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
 void Buffer::release() {
     if (!context_) return;
     VkDevice device = context_->device();
+    if (texelView_) vkDestroyBufferView(device, texelView_, nullptr);
+    texelView_ = VK_NULL_HANDLE;
     if (buffer_) vkDestroyBuffer(device, buffer_, nullptr);
     if (memory_) vkFreeMemory(device, memory_, nullptr);  // also unmaps
     buffer_ = VK_NULL_HANDLE;
     memory_ = VK_NULL_HANDLE;
     mapped_ = nullptr;
+}
+
+bool Buffer::texelViewFits(const Context& context, VkDeviceSize bytes) {
+    uint64_t limit = context.properties().limits.maxTexelBufferElements;
+    // Test aid: TELESCOPE_MAX_TEXELS lowers the limit, so that the paths taken beyond it run on
+    // any device.
+    if (const char* v = std::getenv("TELESCOPE_MAX_TEXELS"); v && *v) limit = std::min<uint64_t>(limit, std::strtoull(v, nullptr, 10));
+    return bytes / 16 <= limit;
+}
+
+VkBufferView Buffer::texelView() const {
+    if (texelView_) return texelView_;
+    const VkDeviceSize bytes = std::max<VkDeviceSize>(size_, 16) / 16 * 16;
+    if (!texelViewFits(*context_, bytes))
+        throw std::runtime_error(fmt::format("buffer '{}' ({} bytes) holds more texels than a texel buffer may ({})",
+                                             name_, size_, context_->properties().limits.maxTexelBufferElements));
+    VkBufferViewCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+    info.buffer = buffer_;
+    info.format = VK_FORMAT_R32G32B32A32_UINT;
+    info.offset = 0;
+    info.range = bytes;
+    VK_CHECK(vkCreateBufferView(context_->device(), &info, nullptr, &texelView_));
+    return texelView_;
 }
 
 void Buffer::upload(const void* data, VkDeviceSize bytes, VkDeviceSize offset) {

@@ -33,6 +33,12 @@ public:
     VkDeviceAddress address() const { return address_; }
     const std::string& name() const { return name_; }
     bool valid() const { return buffer_ != VK_NULL_HANDLE; }
+    // A view of the buffer as 4 x uint32 texels (R32G32B32A32_UINT), for a uniform texel buffer
+    // binding; created at the first call. Throws when the buffer holds more texels than
+    // maxTexelBufferElements (texelViewFits says beforehand; $TELESCOPE_MAX_TEXELS lowers that
+    // limit for tests).
+    VkBufferView texelView() const;
+    static bool texelViewFits(const Context& context, VkDeviceSize bytes);
 
     void upload(const void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
     void download(void* data, VkDeviceSize bytes, VkDeviceSize offset = 0) const;
@@ -57,6 +63,7 @@ private:
     VkDeviceSize size_ = 0;
     VkDeviceAddress address_ = 0;
     void* mapped_ = nullptr;
+    mutable VkBufferView texelView_ = VK_NULL_HANDLE;
     bool mappedCached_ = false;  // the mapping is HOST_CACHED: reads through it are fast
     std::string name_;
 };

@@ -81,9 +81,9 @@ bool hostSpecialisation() {
 
 ComputePipeline::ComputePipeline(const Context& context, std::string shaderName, uint32_t bufferCount,
                                  uint32_t pushConstantBytes, const std::vector<SpecConstant>& spec,
-                                 uint32_t uniformBindings)
+                                 uint32_t uniformBindings, uint32_t texelBindings)
     : context_(context), name_(std::move(shaderName)), bufferCount_(bufferCount), pushBytes_(pushConstantBytes),
-      uniformBindings_(uniformBindings) {
+      uniformBindings_(uniformBindings), texelBindings_(texelBindings) {
     VkDevice device = context.device();
     try {
         auto code = readSpirv(shaderDirectory() + "/" + name_ + ".spv");
@@ -109,13 +109,10 @@ ComputePipeline::ComputePipeline(const Context& context, std::string shaderName,
         VK_CHECK(vkCreateShaderModule(device, &moduleInfo, nullptr, &module_));
 
         std::vector<VkDescriptorSetLayoutBinding> bindings(bufferCount);
-        auto typeOf = [&](uint32_t i) {
-            return (uniformBindings >> i) & 1u ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-        };
-        uint32_t uniformCount = 0;
+        uint32_t typeCounts[3] = {0, 0, 0};  // storage, uniform, texel
         for (uint32_t i = 0; i < bufferCount; ++i) {
-            bindings[i] = {i, typeOf(i), 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
-            uniformCount += typeOf(i) == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+            bindings[i] = {i, descriptorType(i), 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+            ++typeCounts[(texelBindings >> i) & 1u ? 2 : (uniformBindings >> i) & 1u ? 1 : 0];
         }
         VkDescriptorSetLayoutCreateInfo setInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
         setInfo.bindingCount = bufferCount;
@@ -148,8 +145,10 @@ ComputePipeline::ComputePipeline(const Context& context, std::string shaderName,
 
         if (bufferCount) {
             std::vector<VkDescriptorPoolSize> sizes;
-            if (bufferCount > uniformCount) sizes.push_back({VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, bufferCount - uniformCount});
-            if (uniformCount) sizes.push_back({VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, uniformCount});
+            const VkDescriptorType types[3] = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
+                                               VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER};
+            for (int t = 0; t < 3; ++t)
+                if (typeCounts[t]) sizes.push_back({types[t], typeCounts[t]});
             VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
             poolInfo.maxSets = 1;
             poolInfo.poolSizeCount = uint32_t(sizes.size());
@@ -168,6 +167,11 @@ ComputePipeline::ComputePipeline(const Context& context, std::string shaderName,
 }
 
 ComputePipeline::~ComputePipeline() { release(); }
+
+VkDescriptorType ComputePipeline::descriptorType(uint32_t binding) const {
+    if ((texelBindings_ >> binding) & 1u) return VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+    return (uniformBindings_ >> binding) & 1u ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+}
 
 void ComputePipeline::release() {
     VkDevice device = context_.device();
@@ -189,10 +193,21 @@ void ComputePipeline::bindBuffers(const std::vector<const Buffer*>& buffers) {
     const VkDeviceSize maxRange = context_.properties().limits.maxStorageBufferRange;
     const VkDeviceSize maxUniformRange = context_.properties().limits.maxUniformBufferRange;
     std::vector<VkDescriptorBufferInfo> infos(buffers.size());
+    std::vector<VkBufferView> views(buffers.size());
     std::vector<VkWriteDescriptorSet> writes(buffers.size());
     for (size_t i = 0; i < buffers.size(); ++i) {
-        const bool uniform = (uniformBindings_ >> i) & 1u;
-        if (uniform) {
+        const VkDescriptorType type = descriptorType(uint32_t(i));
+        writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+        writes[i].dstSet = set_;
+        writes[i].dstBinding = uint32_t(i);
+        writes[i].descriptorCount = 1;
+        writes[i].descriptorType = type;
+        if (type == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER) {
+            views[i] = buffers[i]->texelView();
+            writes[i].pTexelBufferView = &views[i];
+            continue;
+        }
+        if (type == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER) {
             infos[i] = {buffers[i]->handle(), 0, std::min(buffers[i]->size(), maxUniformRange)};
         } else {
             if (buffers[i]->size() > maxRange)
@@ -201,11 +216,6 @@ void ComputePipeline::bindBuffers(const std::vector<const Buffer*>& buffers) {
                     buffers[i]->name(), buffers[i]->size(), maxRange));
             infos[i] = {buffers[i]->handle(), 0, VK_WHOLE_SIZE};
         }
-        writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-        writes[i].dstSet = set_;
-        writes[i].dstBinding = uint32_t(i);
-        writes[i].descriptorCount = 1;
-        writes[i].descriptorType = uniform ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
         writes[i].pBufferInfo = &infos[i];
     }
     vkUpdateDescriptorSets(context_.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
@@ -218,7 +228,7 @@ std::vector<std::unique_ptr<ComputePipeline>> createComputePipelines(const Conte
     for (const PipelineDesc& d : descs)
         pending.push_back(std::async(std::launch::async, [&context, &d] {
             return std::make_unique<ComputePipeline>(context, d.shaderName, d.bufferCount, d.pushConstantBytes, d.spec,
-                                                     d.uniformBindings);
+                                                     d.uniformBindings, d.texelBindings);
         }));
     std::vector<std::unique_ptr<ComputePipeline>> out;
     std::exception_ptr error;

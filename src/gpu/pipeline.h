@@ -43,16 +43,18 @@ bool hostSpecialisation();
 
 class ComputePipeline {
 public:
-    // Binding i is a storage buffer, or a uniform buffer when bit i of uniformBindings is set.
+    // Binding i is a storage buffer; a uniform buffer when bit i of uniformBindings is set; a
+    // uniform texel buffer (Buffer::texelView, 4 x uint32 texels) when bit i of texelBindings is set.
     ComputePipeline(const Context& context, std::string shaderName, uint32_t bufferCount,
                     uint32_t pushConstantBytes, const std::vector<SpecConstant>& spec = {},
-                    uint32_t uniformBindings = 0);
+                    uint32_t uniformBindings = 0, uint32_t texelBindings = 0);
     ~ComputePipeline();
     ComputePipeline(const ComputePipeline&) = delete;
     ComputePipeline& operator=(const ComputePipeline&) = delete;
 
     // Points binding i at buffers[i] (whole buffer; each must fit maxStorageBufferRange; a uniform
-    // binding sees the first min(size, maxUniformBufferRange) bytes).
+    // binding sees the first min(size, maxUniformBufferRange) bytes; a texel binding the whole
+    // buffer, which must fit maxTexelBufferElements).
     void bindBuffers(const std::vector<const Buffer*>& buffers);
 
     const std::string& name() const { return name_; }
@@ -63,10 +65,11 @@ public:
 
 private:
     void release();
+    VkDescriptorType descriptorType(uint32_t binding) const;
 
     const Context& context_;
     std::string name_;
-    uint32_t bufferCount_ = 0, pushBytes_ = 0, uniformBindings_ = 0;
+    uint32_t bufferCount_ = 0, pushBytes_ = 0, uniformBindings_ = 0, texelBindings_ = 0;
     VkShaderModule module_ = VK_NULL_HANDLE;
     VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
     VkPipelineLayout layout_ = VK_NULL_HANDLE;
@@ -82,6 +85,7 @@ struct PipelineDesc {
     uint32_t pushConstantBytes = 0;
     std::vector<SpecConstant> spec;
     uint32_t uniformBindings = 0;
+    uint32_t texelBindings = 0;
 };
 
 // Creates the pipelines on parallel host threads, returned in the order given. What a pipeline

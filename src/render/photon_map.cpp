@@ -27,7 +27,7 @@ PhotonMap::PhotonMap(gpu::Context& context, uint64_t capacity) : context_(contex
     header_ = gpu::Buffer(context, sizeof(shader::PhotonMapHeader), "photon map header");
     std::vector<gpu::PipelineDesc> stages;
     for (uint32_t stage = shader::kGridStageClear; stage <= shader::kGridStageScatter; ++stage)
-        stages.push_back({"hash_grid_build", 0, uint32_t(sizeof(shader::HashGridPush)), {{shader::kSpecGridStage, stage}}});
+        stages.push_back({"hash_grid_build", 1, uint32_t(sizeof(shader::HashGridPush)), {{shader::kSpecGridStage, stage}}, 0, 1u});
     stages_ = gpu::createComputePipelines(context, stages);
     allocate(std::max<uint64_t>(capacity, 1));
 }
@@ -52,7 +52,11 @@ void PhotonMap::allocate(uint64_t capacity) {
         scratch += n;
     }
     scanScratch_ = gpu::Buffer(context_, std::max<uint64_t>(scratch, 1) * 4, "hash grid scan block totals");
+    ++generation_;
+    for (auto& stage : stages_) stage->bindBuffers({&gatherTexels()});
 }
+
+bool PhotonMap::texelsFit() const { return gpu::Buffer::texelViewFits(context_, sorted_.size()); }
 
 uint64_t PhotonMap::deviceBytes() const {
     return photons_.size() + sorted_.size() + cellCount_.size() + cellStart_.size() + scanScratch_.size() + header_.size();
@@ -166,10 +170,14 @@ void PhotonMap::uploadPhotons(const std::vector<shader::Photon>& photons, float 
 }
 
 std::vector<glm::vec4> PhotonMap::query(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& normals,
-                                        float radius, float logRadius2, float logStep2, uint32_t kernel) {
+                                        float radius, float logRadius2, float logStep2, uint32_t kernel,
+                                        bool byAddress) {
     using namespace shader;
-    gpu::ComputePipeline pipeline(context_, "hash_grid_build", 0, uint32_t(sizeof(HashGridPush)),
-                                  {{kSpecGridStage, kGridStageQuery}, {kSpecPhotonKernel, kernel}});
+    const bool texels = texelsFit() && !byAddress;
+    gpu::ComputePipeline pipeline(context_, "hash_grid_build", 1, uint32_t(sizeof(HashGridPush)),
+                                  {{kSpecGridStage, kGridStageQuery}, {kSpecPhotonKernel, kernel}, {kSpecSortedTexels, texels}},
+                                  0, 1u);
+    pipeline.bindBuffers({texels ? &sorted_ : &header_});
     std::vector<glm::vec4> in(positions.size() * 2);
     for (size_t i = 0; i < positions.size(); ++i) {
         in[2 * i] = glm::vec4(positions[i], 0.0f);

@@ -24,9 +24,17 @@ class PhotonMap {
 public:
     PhotonMap(gpu::Context& context, uint64_t capacity);
 
+    gpu::Context& context() const { return context_; }
     uint64_t capacity() const { return capacity_; }
     uint32_t tableSize() const { return tableSize_; }
     VkDeviceAddress headerAddress() const { return header_.address(); }
+    // What a gather binds as its sorted-photon texels (photon_gather.glsl): the photons in bucket
+    // order when they fit the device's texel-buffer limit (texelsFit, the kSpecSortedTexels value
+    // of the gather's pipeline), else a stand-in, and the gather reads them by address.
+    // generation() changes whenever the buffers are reallocated, and with it the binding.
+    bool texelsFit() const;
+    const gpu::Buffer& gatherTexels() const { return texelsFit() ? sorted_ : header_; }
+    uint64_t generation() const { return generation_; }
     uint64_t deviceBytes() const;
 
     // Grows the buffers to hold at least `photons` photons (contents are lost).
@@ -50,9 +58,11 @@ public:
     void uploadPhotons(const std::vector<shader::Photon>& photons, float cellSize);
     // Tests: gatherPhotons() at each query (position, normal), with kernel sums at radius and
     // the difference between the levels given by logRadius2 and logStep2 (power.x only).
-    // Returns (base, difference, found, 0) per query.
+    // Returns (base, difference, found, 0) per query. byAddress: read the sorted photons by address,
+    // as a gather does when they exceed the texel limit.
     std::vector<glm::vec4> query(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& normals,
-                                 float radius, float logRadius2, float logStep2, uint32_t kernel);
+                                 float radius, float logRadius2, float logStep2, uint32_t kernel,
+                                 bool byAddress = false);
 
 private:
     void allocate(uint64_t capacity);
@@ -63,6 +73,7 @@ private:
     uint64_t capacity_ = 0;
     uint32_t tableSize_ = 0;
     float cellSize_ = 1.0f;
+    uint64_t generation_ = 0;
     gpu::Buffer header_, photons_, sorted_, cellCount_, cellStart_, scanScratch_;
     std::vector<uint64_t> scanLevelOffsets_;  // element offset of each block-total level in scanScratch_
     std::vector<uint32_t> scanLevelCounts_;   // elements of level 0 (the table), 1, 2, ...

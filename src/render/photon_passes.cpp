@@ -171,23 +171,20 @@ public:
           camera_(scene.camera),
           seed_(seed),
           map_(context, scene.integrator.photon.photonCount),
+          gatherSpec_(deviceSceneSpec(context, plan.photonSpec, false)),
           pipelines_(gpu::createComputePipelines(
               context, {{"photon_trace", shader::kSceneBindingCount, uint32_t(sizeof(shader::PhotonTracePush)),
                          deviceSceneSpec(context, plan.photonSpec), kSceneUniformBindings},
-                        // Not in the gather: it traces one camera ray per pixel, and the uniform scene
-                        // made its photon loop slower (docs/BENCHMARKS.photon-notes.md).
-                        {"gather", shader::kSceneBindingCount, uint32_t(sizeof(shader::GatherPush)),
-                         deviceSceneSpec(context, plan.photonSpec, false), kSceneUniformBindings}})),
+                        gatherDesc(map_.texelsFit())})),
           trace_(*pipelines_[0]),
-          gather_(*pipelines_[1]),
           blockBuffer_(context, uint64_t(scene.camera.width) * scene.camera.height * shader::kGatherBlockVec4s * 16,
                        "gather blocks") {
         blockBuffer_.fill(0);
         // Bindings 4-6 (media in the path tracer) are declared by neither shader: any buffer will do.
-        const std::vector<const gpu::Buffer*> bound{b.prims, b.nodes, b.materials, b.lights, b.lights,
-                                                    b.lights,  b.lights, b.nodes, b.prims};
-        trace_.bindBuffers(bound);
-        gather_.bindBuffers(bound);
+        scene_ = {b.prims, b.nodes, b.materials, b.lights, b.lights, b.lights, b.lights, b.nodes, b.prims};
+        trace_.bindBuffers(scene_);
+        gatherTexels_ = map_.texelsFit();  // as the gather pipeline was created
+        bindGather();
         const Camera& cam = scene.camera;
         const uint32_t paths = scene.integrator.photon.photonCount;
         tracePush_.pathCount = paths;
@@ -244,6 +241,7 @@ public:
         batch.dispatch(trace_, &tracePush_, sizeof(tracePush_), gx, gy, 1, "photon_trace");
 
         map_.recordBuild(batch);
+        if (gatherBinds_ != map_.generation()) bindGather();  // the photon map was reallocated
 
         gatherPush_.pass = uint32_t(sampleBase);
         gatherPush_.headerLo = uint32_t(header);
@@ -255,7 +253,7 @@ public:
         const Camera& cam = camera_;
         for (uint32_t slice = 0; slice < slices_; ++slice) {
             gatherPush_.slice = slice;
-            batch.dispatch(gather_, &gatherPush_, sizeof(gatherPush_), (cam.width + 7) / 8, (cam.height + 7) / 8, 1,
+            batch.dispatch(*pipelines_[1], &gatherPush_, sizeof(gatherPush_), (cam.width + 7) / 8, (cam.height + 7) / 8, 1,
                            "gather");
         }
         return blocks() && passInBlock_ + 1 < block_.passes ? 0 : 1;
@@ -294,10 +292,36 @@ public:
         g.headerLo = t.headerLo;
         g.headerHi = t.headerHi;
         g.sliceCount = 1;
-        batch.dispatch(gather_, &g, sizeof(g), 1, 1, 1, "warm-up");
+        batch.dispatch(*pipelines_[1], &g, sizeof(g), 1, 1, 1, "warm-up");
     }
 
 private:
+    // Not the uniform scene in the gather: it traces one camera ray per pixel, and the uniform
+    // scene made its photon loop slower (docs/BENCHMARKS.photon-notes.md).
+    gpu::PipelineDesc gatherDesc(bool texels) const {
+        std::vector<gpu::SpecConstant> spec = gatherSpec_;
+        spec.push_back({shader::kSpecSortedTexels, texels});
+        return {"gather", shader::kGatherBindingCount, uint32_t(sizeof(shader::GatherPush)), spec,
+                kSceneUniformBindings, 1u << shader::kBindingSortedTexels};
+    }
+
+    // The scene, and the photon map's sorted photons as texels. A map grown beyond the texel
+    // limit (or shrunk back under it) needs the gather built for the other way of reading them.
+    void bindGather() {
+        const bool texels = map_.texelsFit();
+        if (texels != gatherTexels_) {
+            const gpu::PipelineDesc d = gatherDesc(texels);
+            pipelines_[1] = std::make_unique<gpu::ComputePipeline>(map_.context(), d.shaderName, d.bufferCount,
+                                                                   d.pushConstantBytes, d.spec, d.uniformBindings,
+                                                                   d.texelBindings);
+            gatherTexels_ = texels;
+        }
+        std::vector<const gpu::Buffer*> bound = scene_;
+        bound.push_back(&map_.gatherTexels());
+        pipelines_[1]->bindBuffers(bound);
+        gatherBinds_ = map_.generation();
+    }
+
     // The uniform schedule's blocks (per_pixel keeps its blocks in the gather's buffer).
     bool blocks() const { return unbiased(integrator_) && !perPixel(integrator_); }
 
@@ -311,9 +335,13 @@ private:
     Camera camera_;  // resolution only (the gather's dispatch size)
     uint32_t seed_;
     PhotonMap map_;
-    std::vector<std::unique_ptr<gpu::ComputePipeline>> pipelines_;  // created in parallel
-    gpu::ComputePipeline &trace_, &gather_;
+    std::vector<gpu::SpecConstant> gatherSpec_;  // but kSpecSortedTexels
+    std::vector<std::unique_ptr<gpu::ComputePipeline>> pipelines_;  // photon_trace, gather; created in parallel
+    gpu::ComputePipeline& trace_;
     gpu::Buffer blockBuffer_;  // the gather's per-pixel block sums and slice sums
+    std::vector<const gpu::Buffer*> scene_;  // the scene bindings of photon_trace and gather
+    uint64_t gatherBinds_ = 0;               // the photon map generation the gather is bound to
+    bool gatherTexels_ = true;               // the gather pipeline's kSpecSortedTexels
     UniformBlock block_;
     shader::PhotonTracePush tracePush_{};
     shader::GatherPush gatherPush_{};
