@@ -96,7 +96,7 @@ void main() {
         hitPoint(pr, origin, dir, hit.t, p, ng);
         light += throughput * primEmission(pr, dir, ng);
         if (v > kPhotonMaxBounces) break;
-        MaterialGpu m = materials[pr.material];
+        MaterialGpu m = sceneMaterial(pr.material);
         bool front = dot(dir, ng) < 0.0;
         vec3 n = front ? ng : -ng;  // faces the camera path
 

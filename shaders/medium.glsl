@@ -26,6 +26,11 @@ layout(constant_id = kSpecTrModel) const uint kSceneTrModel = 0xffffffffu;
 layout(constant_id = kSpecHasInhomogeneousMedia) const bool kHasInhomogeneous = true;
 
 layout(std430, binding = kBindingMedia) readonly buffer MediaBuffer { MediumGpu media[]; };
+layout(std140, binding = kBindingMediaUniform) uniform MediaUniform { MediumGpu uniformMedia[kMaxUniformMedia]; };
+MediumGpu sceneMedium(uint i) {
+    if (kTablesInUniforms) return uniformMedia[i];
+    return media[i];
+}
 layout(std430, binding = kBindingGridData) readonly buffer GridBuffer { float gridData[]; };
 layout(std430, binding = kBindingPrimMedia) readonly buffer PrimMediaBuffer { uint primMedia[]; };
 
@@ -42,16 +47,16 @@ layout(std430, binding = kBindingPrimMedia) readonly buffer PrimMediaBuffer { ui
 // World point / direction -> the grid's unit box [0, 1]^3 (an affine map, MediumGpu::gridRow*).
 vec3 gridUnitPoint(uint mi, vec3 p) {
     vec4 q = vec4(p, 1.0);
-    return vec3(dot(media[mi].gridRow0, q), dot(media[mi].gridRow1, q), dot(media[mi].gridRow2, q));
+    return vec3(dot(sceneMedium(mi).gridRow0, q), dot(sceneMedium(mi).gridRow1, q), dot(sceneMedium(mi).gridRow2, q));
 }
 vec3 gridUnitDir(uint mi, vec3 d) {
-    return vec3(dot(media[mi].gridRow0.xyz, d), dot(media[mi].gridRow1.xyz, d), dot(media[mi].gridRow2.xyz, d));
+    return vec3(dot(sceneMedium(mi).gridRow0.xyz, d), dot(sceneMedium(mi).gridRow1.xyz, d), dot(sceneMedium(mi).gridRow2.xyz, d));
 }
 
 // The lookup stencil of grid medium mi at world point p (nearest-voxel grids: one corner).
 bool gridStencilAt(uint mi, vec3 p, out GridStencil g) {
-    if (!gridStencil(media[mi].gridRes, gridUnitPoint(mi, p), g)) return false;
-    if ((media[mi].gridFlags & kGridNearest) != 0u) g.t = gridNearestWeights(g.t);
+    if (!gridStencil(sceneMedium(mi).gridRes, gridUnitPoint(mi, p), g)) return false;
+    if ((sceneMedium(mi).gridFlags & kGridNearest) != 0u) g.t = gridNearestWeights(g.t);
     return true;
 }
 
@@ -59,7 +64,7 @@ bool gridStencilAt(uint mi, vec3 p, out GridStencil g) {
 float gridDensityAt(uint mi, vec3 p) {
     GridStencil g;
     if (!gridStencilAt(mi, p, g)) return 0.0;
-    uint i = media[mi].gridOffset + g.corner, x = g.step.x, y = g.step.y, z = g.step.z;
+    uint i = sceneMedium(mi).gridOffset + g.corner, x = g.step.x, y = g.step.y, z = g.step.z;
     return gridTrilinear(g.t, gridData[i], gridData[i + x], gridData[i + y], gridData[i + x + y], gridData[i + z],
                          gridData[i + x + z], gridData[i + y + z], gridData[i + x + y + z]);
 }
@@ -67,13 +72,13 @@ float gridDensityAt(uint mi, vec3 p) {
 // Emission per unit length of a grid medium at world point p (Tungsten's voxel medium: the
 // emission grid, times the density where scale_emission_by_density).
 vec3 gridEmissionAt(uint mi, vec3 p) {
-    uint flags = media[mi].gridFlags;
+    uint flags = sceneMedium(mi).gridFlags;
     GridStencil g;
     if ((flags & kGridEmission) == 0u || !gridStencilAt(mi, p, g)) return vec3(0.0);
     uint x = 3u * g.step.x, y = 3u * g.step.y, z = 3u * g.step.z;
     vec3 e;
     for (uint c = 0u; c < 3u; ++c) {
-        uint i = media[mi].emissionOffset + 3u * g.corner + c;
+        uint i = sceneMedium(mi).emissionOffset + 3u * g.corner + c;
         e[c] = gridTrilinear(g.t, gridData[i], gridData[i + x], gridData[i + y], gridData[i + x + y], gridData[i + z],
                              gridData[i + x + z], gridData[i + y + z], gridData[i + x + y + z]);
     }
@@ -88,7 +93,7 @@ vec3 gridEmissionAt(uint mi, vec3 p) {
 // The model of medium mi; when every medium of the scene has the same simple model its type is a
 // specialisation constant, so the compiler keeps only that model's code.
 TrModel mediumModel(uint mi) {
-    TrModel m = media[mi].model;
+    TrModel m = sceneMedium(mi).model;
     if (kSceneTrModel != 0xffffffffu) {
         m.type = kSceneTrModel;
         m.typeA = kSceneTrModel;
@@ -99,18 +104,18 @@ TrModel mediumModel(uint mi) {
 
 // Density (relative to sigma_a, sigma_s) of medium mi at world point p.
 float mediumDensityAt(uint mi, vec3 p) {
-    if (!kHasInhomogeneous) return media[mi].density;
-    uint type = media[mi].type;
+    if (!kHasInhomogeneous) return sceneMedium(mi).density;
+    uint type = sceneMedium(mi).type;
     if (type == kMediumExponential)
-        return media[mi].density * exp(-media[mi].falloffScale * dot(p - media[mi].unitPoint, media[mi].falloffDir));
+        return sceneMedium(mi).density * exp(-sceneMedium(mi).falloffScale * dot(p - sceneMedium(mi).unitPoint, sceneMedium(mi).falloffDir));
     if (kHasGrids && type == kMediumGrid) return gridDensityAt(mi, p);
-    return media[mi].density;
+    return sceneMedium(mi).density;
 }
 
 // The segment o + t d, t in [0, l], of medium mi as a density profile; grid segments are clipped
 // to the grid box (density 0 outside), so their origin moves to the box entry.
 TrSegment mediumSegment(uint mi, vec3 o, vec3 d, float l) {
-    MediumGpu m = media[mi];
+    MediumGpu m = sceneMedium(mi);
     TrSegment s;
     s.sigmaT = m.sigmaT;
     s.origin = o;
@@ -152,8 +157,8 @@ TrEstimator sceneTrEstimator() {
 // ---- Trackers through the majorant grid ----
 // The (min, max) density over the voxels lookups in majorant cell c of medium mi may read.
 vec2 majorantCell(uint mi, ivec3 c) {
-    uvec3 r = media[mi].majorantRes;
-    uint i = media[mi].majorantOffset + 2u * ((uint(c.z) * r.y + uint(c.y)) * r.x + uint(c.x));
+    uvec3 r = sceneMedium(mi).majorantRes;
+    uint i = sceneMedium(mi).majorantOffset + 2u * ((uint(c.z) * r.y + uint(c.y)) * r.x + uint(c.x));
     return vec2(gridData[i], gridData[i + 1u]);
 }
 
@@ -170,8 +175,8 @@ vec3 trTrackGrid(uint mode, TrSegment s, inout Rng rng, inout uint lookups) {
     if (!(s.len > 0.0)) return result;
     uint mi = s.medium;
     float sMax = trMaxComponent(s.sigmaT);
-    vec3 scale = media[mi].majorantScale;
-    ivec3 res = ivec3(media[mi].majorantRes);
+    vec3 scale = sceneMedium(mi).majorantScale;
+    ivec3 res = ivec3(sceneMedium(mi).majorantRes);
     vec3 xo = gridUnitPoint(mi, s.origin) * scale;
     vec3 xd = gridUnitDir(mi, s.dir) * scale;
     ivec3 cell = clamp(ivec3(floor(xo)), ivec3(0), res - 1);
@@ -239,14 +244,14 @@ const bool kGridTracking = kHasGrids && (kTrEstimatorType == kTrEstDeltaTracking
 vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, bool endOnSurface, inout Rng rng) {
     if (kCombExactEverywhere)
         return trForm3(mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
-                       media[mi].sigmaT * (media[mi].density * max(l, 0.0)));
-    if (kCombEstimator && media[mi].type == kMediumHomogeneous)
+                       sceneMedium(mi).sigmaT * (sceneMedium(mi).density * max(l, 0.0)));
+    if (kCombEstimator && sceneMedium(mi).type == kMediumHomogeneous)
         return trForm3(mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
-                       media[mi].sigmaT * (media[mi].density * max(l, 0.0)));
+                       sceneMedium(mi).sigmaT * (sceneMedium(mi).density * max(l, 0.0)));
     uint lookups = 0u;
     TrSegment s = mediumSegment(mi, o, d, l);
     if (kGridTracking) {
-        if (media[mi].type == kMediumGrid) return trTrackGrid(kTrEstimatorType, s, rng, lookups);
+        if (sceneMedium(mi).type == kMediumGrid) return trTrackGrid(kTrEstimatorType, s, rng, lookups);
     }
     return trEstimate(sceneTrEstimator(), mediumModel(mi), trFormOf(startOnSurface, endOnSurface), s, rng, lookups);
 }
@@ -283,7 +288,7 @@ vec3 passThroughTransmittance(MaterialGpu m, float cosI, inout Rng rng) {
     vec3 w = vec3(1.0);
     for (uint level = 0u; level < kMaxMaterialNesting && m.type == kBsdfMixed; ++level) {
         w *= m.albedo;
-        m = materials[mixedComponent(m, rngNext(rng))];
+        m = sceneMaterial(mixedComponent(m, rngNext(rng)));
     }
     if (m.type == kBsdfTransparency) return w * (1.0 - m.alpha);
     if (m.type == kBsdfForward) return w;
@@ -305,7 +310,7 @@ vec3 shadowTransmittance(vec3 o, vec3 d, float tMax, uint medium, bool startOnSu
         float end = found ? hit.t : tMax;
         if (medium != 0u) {
             // an unbounded medium absorbs everything; a grid ends at its box
-            bool grid = kHasGrids && media[medium - 1u].type == kMediumGrid;
+            bool grid = kHasGrids && sceneMedium(medium - 1u).type == kMediumGrid;
             if (!(end < kInfinity) && !grid) return vec3(0.0);
             tr *= mediumTransmittance(medium - 1u, o, d, end, startOnSurface, true, rng);
         }
@@ -314,8 +319,8 @@ vec3 shadowTransmittance(vec3 o, vec3 d, float tMax, uint medium, bool startOnSu
         vec3 p = o + d * hit.t;
         vec3 ng = primNormalAt(pr, p);
         if (kHasPassThrough) {
-            tr *= passThroughTransmittance(materials[pr.material], abs(dot(d, ng)), rng);
-        } else if (materials[pr.material].type != kBsdfForward) {
+            tr *= passThroughTransmittance(sceneMaterial(pr.material), abs(dot(d, ng)), rng);
+        } else if (sceneMaterial(pr.material).type != kBsdfForward) {
             return vec3(0.0);
         }
         if (tr == vec3(0.0)) return tr;
@@ -350,7 +355,7 @@ vec3 samplePhaseHG(vec3 dir, float g, float u1, float u2) {
     return normalize(t * (sinTheta * cos(phi)) + b * (sinTheta * sin(phi)) + dir * cosTheta);
 }
 
-float mediumPhaseG(uint mi) { return media[mi].phase == kPhaseHenyeyGreenstein ? media[mi].phaseG : 0.0; }
+float mediumPhaseG(uint mi) { return sceneMedium(mi).phase == kPhaseHenyeyGreenstein ? sceneMedium(mi).phaseG : 0.0; }
 
 // ---- Dirac free flights: linear and pulse from a medium point ----
 // From a medium point the free flight of `linear` is a Dirac at tau = max_t, that of `pulse` a
@@ -362,8 +367,8 @@ bool sampleDiracSegment(uint mi, vec3 o, vec3 d, float l, inout vec3 throughput,
     float uc = rngNext(rng), ud = rngNext(rng);
     float t;
     vec3 weight;
-    bool scattered = sampleDiracFlight(mediumModel(mi), media[mi].sigmaT * media[mi].density,
-                                       media[mi].sigmaS * media[mi].density, l, uc, ud, t, weight);
+    bool scattered = sampleDiracFlight(mediumModel(mi), sceneMedium(mi).sigmaT * sceneMedium(mi).density,
+                                       sceneMedium(mi).sigmaS * sceneMedium(mi).density, l, uc, ud, t, weight);
     p = o + d * t;
     throughput *= weight;
     return scattered;
@@ -377,26 +382,26 @@ bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, ino
                          out vec3 emitted, inout Rng rng) {
     p = o;
     emitted = vec3(0.0);
-    bool emits = kHasGrids && media[mi].type == kMediumGrid && (media[mi].gridFlags & kGridEmission) != 0u;
+    bool emits = kHasGrids && sceneMedium(mi).type == kMediumGrid && (sceneMedium(mi).gridFlags & kGridEmission) != 0u;
     TrModel model = mediumModel(mi);
-    if (!fromSurface && (!kHasInhomogeneous || media[mi].type == kMediumHomogeneous) && trModelIsDirac(model) &&
-        trMaxComponent(media[mi].sigmaS) > 0.0)
+    if (!fromSurface && (!kHasInhomogeneous || sceneMedium(mi).type == kMediumHomogeneous) && trModelIsDirac(model) &&
+        trMaxComponent(sceneMedium(mi).sigmaS) > 0.0)
         return sampleDiracSegment(mi, o, d, l, throughput, p, rng);
     TrSegment whole = mediumSegment(mi, o, d, l);
     // The guide works on the part of [0, l] with density (grids: the box).
-    float t0 = (kHasGrids && media[mi].type == kMediumGrid) ? dot(whole.origin - o, d) : 0.0;
+    float t0 = (kHasGrids && sceneMedium(mi).type == kMediumGrid) ? dot(whole.origin - o, d) : 0.0;
     // The guide's homogeneous density: an 8-point comb average of the segment, drawn independently
     // of everything else (so the pdf is fixed given it), at least 10% of the majorant so that every
     // point with density keeps a positive pdf. Purely absorbing media never scatter (mu = 0).
     float guideDensity = whole.densityMax;
     if (kHasInhomogeneous) {
-        if (media[mi].type != kMediumHomogeneous && whole.len > 0.0) {
+        if (sceneMedium(mi).type != kMediumHomogeneous && whole.len > 0.0) {
             uint lookups = 0u;
             float average = combSum(whole, rngNext(rng), 0u, 1u, 8u, 8.0, lookups) / 8.0;
             guideDensity = max(average, 0.1 * whole.densityMax);
         }
     }
-    float mu = (trMaxComponent(media[mi].sigmaS) > 0.0 || emits) ? trMaxComponent(whole.sigmaT) * guideDensity : 0.0;
+    float mu = (trMaxComponent(sceneMedium(mi).sigmaS) > 0.0 || emits) ? trMaxComponent(whole.sigmaT) * guideDensity : 0.0;
     float sigmaBar = trSigmaBar(model);
     float u = rngNext(rng);
     if (mu > 0.0 && whole.len > 0.0) {
@@ -406,7 +411,7 @@ bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, ino
             // Scatter at t
             float pdf = mu * sigmaBar * trForm(model, trFormOf(fromSurface, false), depth);
             p = o + d * t;
-            vec3 sigmaS = media[mi].sigmaS * mediumDensityAt(mi, p);
+            vec3 sigmaS = sceneMedium(mi).sigmaS * mediumDensityAt(mi, p);
             if (!(pdf > 0.0)) {
                 throughput = vec3(0.0);
                 return true;

@@ -40,6 +40,19 @@ layout(std430, binding = kBindingPrims) readonly buffer PrimBuffer { Prim prims[
 layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[]; };
 layout(std430, binding = kBindingMaterials) readonly buffer MaterialBuffer { MaterialGpu materials[]; };
 layout(std430, binding = kBindingLights) readonly buffer LightBuffer { LightGpu lights[]; };
+// The same tables as uniform buffers, read when they fit (kSpecTablesInUniforms; the media's in
+// medium.glsl): lavapipe gathers a divergent uniform load with vector instructions.
+layout(constant_id = kSpecTablesInUniforms) const bool kTablesInUniforms = false;
+layout(std140, binding = kBindingMaterialsUniform) uniform MaterialUniform { MaterialGpu uniformMaterials[kMaxUniformMaterials]; };
+layout(std140, binding = kBindingLightsUniform) uniform LightUniform { LightGpu uniformLights[kMaxUniformLights]; };
+MaterialGpu sceneMaterial(uint i) {
+    if (kTablesInUniforms) return uniformMaterials[i];
+    return materials[i];
+}
+LightGpu sceneLight(uint i) {
+    if (kTablesInUniforms) return uniformLights[i];
+    return lights[i];
+}
 layout(std430, binding = kBindingTextures) readonly buffer TextureBuffer { vec4 textureData[]; };
 // The environment image and its sampling tables (shared/environment_map.h), read only when the
 // environment light has one.

@@ -149,7 +149,7 @@ uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng) {
     uint mi = s.medium - 1u;
     // The medium's own limit (its max_bounces, Tungsten's sampleDistance): no free flight after
     // more than max_bounces scattering events in a row.
-    if (s.mediumScatters > media[mi].maxBounces) return 2u;
+    if (s.mediumScatters > sceneMedium(mi).maxBounces) return 2u;
     vec3 p, emitted;
     bool scattered = sampleMediumSegment(mi, s.origin, s.dir, tHit, s.fromSurface, s.throughput, p, emitted, rng);
     uint v = s.vertex;
@@ -161,7 +161,7 @@ uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng) {
     if (v > s.limit) return 2u;
     s.mediumScatters += 1u;
     // This vertex's phase-sampled ray will not be traced when the medium limit ends the path next.
-    bool last = s.mediumScatters > media[mi].maxBounces;
+    bool last = s.mediumScatters > sceneMedium(mi).maxBounces;
     if (kLightSampling && kLightCount > 0u) {
         uint crossings;
         vec3 direct = sampleDirectMedium(p, s.dir, mi, !last, rng, crossings);
@@ -197,7 +197,7 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     if (kHasMedia && s.medium != 0u) {
         // Media are enclosed by their boundaries, and an unbounded one absorbs all; a grid medium
         // is bounded by its box, so a ray may leave the scene through it (Tungsten's voxel medium).
-        bool gridMedium = kHasGrids && media[s.medium - 1u].type == kMediumGrid;
+        bool gridMedium = kHasGrids && sceneMedium(s.medium - 1u).type == kMediumGrid;
         if (!found && !gridMedium) return false;
         uint r = mediumStep(s, found ? hit.t : kInfinity, pmf, rng);
         if (r == 1u) return true;
@@ -205,13 +205,13 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     }
     if (!found) {
         if (kEnvironmentLight != 0xffffffffu) {
-            LightGpu env = lights[kEnvironmentLight];
+            LightGpu env = sceneLight(kEnvironmentLight);
             float mis = (s.specularPrev || !kLightSampling) ? 1.0
                                                              : powerHeuristic(s.pdfPrev, environmentPdf(env, s.dir));
             addContribution(s.result, v - 1u, s.throughput * environmentRadiance(env, s.dir) * mis, pmf, s.level);
         }
         if (kCapLight != 0xffffffffu) {
-            LightGpu cap = lights[kCapLight];
+            LightGpu cap = sceneLight(kCapLight);
             if (dot(s.dir, cap.position) >= cap.cosCap) {
                 float pdf = cap.pmf / (2.0 * kPi * (1.0 - cap.cosCap));
                 float mis = (s.specularPrev || !kLightSampling) ? 1.0 : powerHeuristic(s.pdfPrev, pdf);
@@ -236,7 +236,7 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     }
     if (v > s.limit) return false;  // vertex v only adds light with v or more bounces
 
-    MaterialGpu m = materials[pr.material];
+    MaterialGpu m = sceneMaterial(pr.material);
     if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
     if (kHasMedia && m.type == kBsdfForward) {
         // Invisible medium boundary: the ray goes on; the crossing counts as a bounce (Tungsten).
@@ -268,14 +268,14 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         for (uint level = 0u; level < kMaxMaterialNesting; ++level) {
             if ((kBsdfFamilies & kFamilyMixed) != 0u && m.type == kBsdfMixed) {
                 s.throughput *= m.albedo;
-                m = materials[mixedComponent(m, rngNext(rng))];
+                m = sceneMaterial(mixedComponent(m, rngNext(rng)));
                 if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);  // the component's own textures
             } else if ((kBsdfFamilies & kFamilyTransparency) != 0u && m.type == kBsdfTransparency) {
                 if (rngNext(rng) >= m.alpha) {
                     pass = true;
                     break;
                 }
-                m = materials[m.component0];
+                m = sceneMaterial(m.component0);
                 if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
             } else {
                 break;

@@ -20,6 +20,9 @@ layout(std430, binding = kBindingPrims) readonly buffer PrimBuffer { Prim prims[
 layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[]; };
 layout(std430, binding = kBindingMaterials) readonly buffer MaterialBuffer { MaterialGpu materials[]; };
 layout(std430, binding = kBindingLights) readonly buffer LightBuffer { LightGpu lights[]; };
+// (The path tracer may read these tables from uniform buffers: path_trace_main.glsl.)
+MaterialGpu sceneMaterial(uint i) { return materials[i]; }
+LightGpu sceneLight(uint i) { return lights[i]; }
 
 #include "scene_geometry.glsl"
 

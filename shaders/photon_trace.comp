@@ -33,7 +33,7 @@ layout(push_constant) uniform Push { PhotonTracePush pc; };
 // Emission: origin, direction and power of a photon leaving a light picked by power.
 void emitPhoton(uint path, inout Rng rng, out vec3 origin, out vec3 dir, out vec3 power) {
     uint li = pickLight(rngNext(rng));
-    LightGpu light = lights[li];
+    LightGpu light = sceneLight(li);
     uint t = curvePosition(path, pc.pathCount, rngNextUint(rng));
     float u1, u2, u3 = 0.0, u4 = 0.0;
     if (light.type == kLightPoint) {
@@ -97,7 +97,7 @@ void main() {
         Prim pr = scenePrim(hit.prim);
         vec3 p, ng;
         hitPoint(pr, origin, dir, hit.t, p, ng);
-        MaterialGpu m = materials[pr.material];
+        MaterialGpu m = sceneMaterial(pr.material);
         bool front = dot(dir, ng) < 0.0;
         vec3 n = front ? ng : -ng;  // faces the incoming photon
 

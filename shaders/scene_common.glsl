@@ -16,7 +16,7 @@ uint pickLight(float u) {
     uint lo = 0u, hi = kLightCount - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) >> 1u;
-        if (u < lights[mid].cdf) hi = mid;
+        if (u < sceneLight(mid).cdf) hi = mid;
         else lo = mid + 1u;
     }
     return lo;
@@ -25,7 +25,7 @@ uint pickLight(float u) {
 // Emitted radiance towards -dir at a point of prim with geometric normal ng (one-sided).
 vec3 primEmission(Prim pr, vec3 dir, vec3 ng) {
     if (pr.light < 0 || dot(dir, ng) >= 0.0) return vec3(0.0);
-    return lights[uint(pr.light)].radiance;
+    return sceneLight(uint(pr.light)).radiance;
 }
 
 // ---- Lights ----
@@ -46,7 +46,7 @@ float environmentPdf(LightGpu env, vec3 dir) {
 
 // Solid-angle density with which next-event estimation picks a point on an emissive prim.
 float areaLightPdf(uint lightIndex, float area, float dist, float cosLight) {
-    return lights[lightIndex].pmf * dist * dist / max(cosLight * area, 1e-30);
+    return sceneLight(lightIndex).pmf * dist * dist / max(cosLight * area, 1e-30);
 }
 
 // One light picked by power and a direction towards it from p: the shadow-ray length, the
@@ -60,7 +60,7 @@ struct LightSample {
 
 bool sampleLight(vec3 p, inout Rng rng, out LightSample ls) {
     uint li = pickLight(rngNext(rng));
-    LightGpu light = lights[li];
+    LightGpu light = sceneLight(li);
     float u1 = rngNext(rng), u2 = rngNext(rng);
     ls.pdf = 0.0;
     if (light.type == kLightPoint) {

@@ -121,10 +121,19 @@ CONST uint kBindingTextures = 9u;
 // The environment image of an infinite_sphere and its sampling tables (shared/environment_map.h;
 // one dummy float without): every path_trace pipeline binds it, only kSpecEnvironmentMap reads it.
 CONST uint kBindingEnvironment = 10u;
-CONST uint kPathTraceBindingCount = 11u;
+// The materials, lights and media again, as uniform buffers of kUniformSceneBytes: read from there
+// when all three fit (kSpecTablesInUniforms). Lavapipe serves a divergent uniform-buffer load with
+// vector gathers, where a storage-buffer load loops over the lanes once per component.
+CONST uint kBindingMaterialsUniform = 11u;
+CONST uint kBindingLightsUniform = 12u;
+CONST uint kBindingMediaUniform = 13u;
+CONST uint kPathTraceBindingCount = 14u;
 CONST uint kUniformSceneBytes = 65536u;  // maxUniformBufferRange on lavapipe; the Vulkan minimum is 16384
 CONST uint kMaxUniformNodes = 2048u;     // kUniformSceneBytes / sizeof(BvhNode)
 CONST uint kMaxUniformPrims = 1024u;     // kUniformSceneBytes / sizeof(Prim)
+CONST uint kMaxUniformMaterials = 682u;  // kUniformSceneBytes / sizeof(MaterialGpu), rounded down
+CONST uint kMaxUniformLights = 1365u;    // ... / sizeof(LightGpu)
+CONST uint kMaxUniformMedia = 273u;      // ... / sizeof(MediumGpu)
 CONST uint kSceneBindingCount = 9u;      // photon_trace and gather: the scene only (bindings 4-6, media, unused)
 
 // Specialisation constant ids: features a scene lacks are folded away by the compiler.
@@ -153,6 +162,7 @@ CONST uint kSpecSceneInUniforms = 19u;   // BVH nodes and primitives read from t
 CONST uint kSpecBsdfFamilies = 21u;     // kFamily* bits: the non-delta material families present
 CONST uint kSpecHasTextures = 22u;      // some material has a texture (uvs are computed at its hits)
 CONST uint kSpecEnvironmentMap = 23u;    // the environment light (kSpecEnvironmentLight) has an image
+CONST uint kSpecTablesInUniforms = 24u;  // materials, lights and media read from the uniform bindings
 
 // Participating media, ids 32..47 (shaders/medium.glsl).
 CONST uint kSpecHasMedia = 32u;          // media or forward (index-matched) boundaries present

@@ -333,6 +333,8 @@ GpuScene buildGpuScene(const Scene& scene) {
     }
     if (out.textureData.empty()) out.textureData.push_back(glm::vec4(0.0f));
     f.fitsUniforms = out.nodes.size() <= shader::kMaxUniformNodes && out.prims.size() <= shader::kMaxUniformPrims;
+    f.tablesFitUniforms = out.materials.size() <= shader::kMaxUniformMaterials &&
+                          out.lights.size() <= shader::kMaxUniformLights && out.media.size() <= shader::kMaxUniformMedia;
     f.primCount = uint32_t(out.prims.size());
     f.bruteForcePrims = f.fitsUniforms && out.prims.size() <= shader::kMaxBruteForcePrims ? uint32_t(out.prims.size()) : 0u;
     return out;

@@ -28,6 +28,7 @@ struct SceneFeatures {
     bool inhomogeneous = false; // media whose density varies (exponential falloff or grid)
     uint32_t mediumCount = 0;
     bool fitsUniforms = false;  // nodes and prims fit the path tracer's uniform bindings
+    bool tablesFitUniforms = false;  // materials, lights and media fit them too (kSpecTablesInUniforms)
     uint32_t primCount = 0;        // primitive slots (a mesh's triangles count one each)
     uint32_t bruteForcePrims = 0;  // > 0: so few prims (in uniforms) that rays test them all, no BVH
     bool textures = false;      // some material has a textured parameter

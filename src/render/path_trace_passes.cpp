@@ -121,6 +121,9 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
             f.media ? "every medium homogeneous: comb estimators are exact, their code folded out" : "no participating media");
     feature("uniform scene", f.fitsUniforms, "BVH nodes and primitives read from uniform buffers (faster loads)",
             "more than 2048 BVH nodes or 1024 primitives: read from storage buffers");
+    feature("uniform tables", f.tablesFitUniforms, "materials, lights and media read from uniform buffers (faster loads)",
+            fmt::format("more than {} materials, {} lights or {} media: read from storage buffers",
+                        shader::kMaxUniformMaterials, shader::kMaxUniformLights, shader::kMaxUniformMedia));
     feature("brute-force rays", f.bruteForcePrims > 0u,
             fmt::format("{} primitives tested in turn by every ray, no BVH walk", f.bruteForcePrims),
             fmt::format("BVH traversal over {} primitives (brute force takes at most {}, in uniform buffers)",
@@ -153,6 +156,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecTestPmfWeight, gpu::specFloat(in.debias.testPmfWeight)},
         {kSpecSceneInUniforms, f.fitsUniforms},
         {kSpecBruteForcePrims, f.bruteForcePrims},
+        {kSpecTablesInUniforms, f.tablesFitUniforms},
         {kSpecBsdfFamilies, f.bsdfFamilies},
         {kSpecHasTextures, f.textures},
         {kSpecEnvironmentMap, f.environmentMap},
@@ -177,10 +181,9 @@ public:
     PathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan, const RenderBuffers& b,
                     uint32_t seed)
         : pipeline_(context, plan.pathTraceShader, shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
-                    deviceSceneSpec(context, plan.pathTraceSpec), kSceneUniformBindings) {
-        pipeline_.bindBuffers(
-            {b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims, b.textures,
-             b.environment});
+                    deviceSceneSpec(context, plan.pathTraceSpec), kPathTraceUniformBindings) {
+        pipeline_.bindBuffers({b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims,
+                               b.textures, b.environment, b.materials, b.lights, b.media});
         const Camera& cam = scene.camera;
         setPushCamera(push_, cam);
         push_.width = cam.width;

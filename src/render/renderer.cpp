@@ -36,9 +36,9 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uin
     // Padded: the path tracer binds them as uniform buffers of this size too (gpu_types.h).
     prims_ = makeBuffer(gpuScene_.prims, "prims", shader::kUniformSceneBytes);
     nodes_ = makeBuffer(gpuScene_.nodes, "bvh nodes", shader::kUniformSceneBytes);
-    materials_ = makeBuffer(gpuScene_.materials, "materials");
-    lights_ = makeBuffer(gpuScene_.lights, "lights");
-    media_ = makeBuffer(gpuScene_.media, "media");  // dummies without media
+    materials_ = makeBuffer(gpuScene_.materials, "materials", shader::kUniformSceneBytes);
+    lights_ = makeBuffer(gpuScene_.lights, "lights", shader::kUniformSceneBytes);
+    media_ = makeBuffer(gpuScene_.media, "media", shader::kUniformSceneBytes);  // dummies without media
     gridData_ = makeBuffer(gpuScene_.gridData, "grid data");
     primMedia_ = makeBuffer(gpuScene_.primMedia, "prim media");
     textures_ = makeBuffer(gpuScene_.textureData, "textures");  // a dummy without textures

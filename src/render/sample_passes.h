@@ -43,17 +43,25 @@ void setPushCamera(Push& push, const Camera& cam) {
 
 // A plan's specialisation constants for this device: without the uniform scene (and so without
 // brute-force rays, which read it) where uniform buffers are smaller than kUniformSceneBytes, or
-// where the caller does not want it (uniformScene false).
+// where the caller does not want it (uniformScene false); without the uniform tables where uniform
+// buffers are smaller.
 inline std::vector<gpu::SpecConstant> deviceSceneSpec(const gpu::Context& context, std::vector<gpu::SpecConstant> spec,
                                                       bool uniformScene = true) {
-    if (!uniformScene || context.properties().limits.maxUniformBufferRange < shader::kUniformSceneBytes)
-        for (auto& s : spec)
-            if (s.id == shader::kSpecSceneInUniforms || s.id == shader::kSpecBruteForcePrims) s.value = 0;
+    const bool small = context.properties().limits.maxUniformBufferRange < shader::kUniformSceneBytes;
+    for (auto& s : spec) {
+        if ((!uniformScene || small) && (s.id == shader::kSpecSceneInUniforms || s.id == shader::kSpecBruteForcePrims))
+            s.value = 0;
+        if (small && s.id == shader::kSpecTablesInUniforms) s.value = 0;
+    }
     return spec;
 }
 
 // The scene's uniform bindings (kBindingBvhUniform, kBindingPrimsUniform) of path_trace, photon_trace and gather.
 constexpr uint32_t kSceneUniformBindings = (1u << shader::kBindingBvhUniform) | (1u << shader::kBindingPrimsUniform);
+// path_trace's: those, and the materials, lights and media (kSpecTablesInUniforms).
+constexpr uint32_t kPathTraceUniformBindings = kSceneUniformBindings | (1u << shader::kBindingMaterialsUniform) |
+                                               (1u << shader::kBindingLightsUniform) |
+                                               (1u << shader::kBindingMediaUniform);
 
 // Buffers the integrators read: the scene (bindings 0..3), the accumulation (by address) and the
 // media (path tracer only).
