@@ -26,7 +26,14 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer PhotonArray
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer UintArrayRef { uint v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4ArrayRef { vec4 v[]; };
 
-layout(binding = 0) uniform usamplerBuffer sortedTexels;  // the only binding of every stage
+// The photon arrays as texels of 4 x uint32 (two per photon) when they fit a texel buffer
+// (kSpecSortedTexels, photon_gather.glsl): the photons as stored (read by the count and the
+// scatter), and in bucket order (written by the scatter, read by the query). Lavapipe reads and
+// writes a texel for all lanes at once, where a storage-buffer or address access loops over the
+// lanes once per component.
+layout(binding = 0) uniform usamplerBuffer sortedTexels;
+layout(binding = 1) uniform usamplerBuffer photonTexels;
+layout(binding = 2, rgba32ui) uniform writeonly uimageBuffer sortedImage;
 #include "photon_gather.glsl"
 
 // Per subgroup of the workgroup: its total and its largest count (at most one subgroup per thread).
@@ -34,6 +41,7 @@ shared uint subgroupTotals[kGridGroupSize];
 shared uint subgroupMaxima[kGridGroupSize];
 
 uint threadCount() { return gl_NumWorkGroups.x * kGridGroupSize; }
+
 
 // Exclusive scan of one block of kScanBlock elements: 4 per thread, the thread totals scanned
 // within each subgroup (subgroupInclusiveAdd), then across the subgroups through shared memory
@@ -84,10 +92,10 @@ void main() {
     if (kStage == kGridStageClear) {
         for (uint i = id; i < map.h.tableSize; i += threadCount()) cellCount.v[i] = 0u;
     } else if (kStage == kGridStageCount) {
+        // The scatter computes the same bucket again from the position (cheaper than storing it).
         for (uint i = id; i < stored; i += threadCount()) {
-            uint h = gridHash(gridCell(photons.p[i].position, map.h.cellSize), map.h.tableSize);
-            photons.p[i].cell = h;
-            atomicAdd(cellCount.v[h], 1u);
+            vec3 p = kSortedTexels ? uintBitsToFloat(texelFetch(photonTexels, int(2u * i)).xyz) : photons.p[i].position;
+            atomicAdd(cellCount.v[gridHash(gridCell(p, map.h.cellSize), map.h.tableSize)], 1u);
         }
     } else if (kStage == kGridStageScan) {
         scanBlock();
@@ -98,8 +106,16 @@ void main() {
     } else if (kStage == kGridStageScatter) {
         PhotonArrayRef sorted = PhotonArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
         for (uint i = id; i < stored; i += threadCount()) {
-            Photon ph = photons.p[i];
-            sorted.p[atomicAdd(cellStart.v[ph.cell], 1u)] = ph;
+            if (kSortedTexels) {
+                uvec4 a = texelFetch(photonTexels, int(2u * i)), b = texelFetch(photonTexels, int(2u * i + 1u));
+                uint h = gridHash(gridCell(uintBitsToFloat(a.xyz), map.h.cellSize), map.h.tableSize);
+                int slot = int(atomicAdd(cellStart.v[h], 1u));
+                imageStore(sortedImage, 2 * slot, a);
+                imageStore(sortedImage, 2 * slot + 1, b);
+            } else {
+                Photon ph = photons.p[i];
+                sorted.p[atomicAdd(cellStart.v[gridHash(gridCell(ph.position, map.h.cellSize), map.h.tableSize)], 1u)] = ph;
+            }
         }
     } else if (kStage == kGridStageQuery) {
         // Query i: src.v[2i] = (x, -), src.v[2i+1] = (n, -); out: (base.x, difference.x, found, 0),

@@ -60,7 +60,7 @@ void compareWithBruteForce(uint32_t photonCount, float size, float radius, uint3
         p.position = (glm::vec3(rngNext(rng), rngNext(rng), rngNext(rng)) - 0.5f) * size;
         p.power = glm::vec3(0.5f + rngNext(rng), 0.0f, 0.0f);
         p.direction = encodeDirection(direction(rng));
-        p.cell = 0;
+        p.pad0 = 0;
     }
     std::vector<glm::vec3> xs(queryCount), ns(queryCount);
     for (uint32_t i = 0; i < queryCount; ++i) {

@@ -280,9 +280,9 @@ CONST uint kGatherSlicePhotons = 4096u;
 CONST uint kGatherBlockVec4s = 6u;  // per-pixel block buffer of the gather (gather.comp)
 
 // A stored photon: where it landed, where it came from (octahedral, 2 x snorm16) and its power
-// (flux per emitted path of the pass). cell is the hash bucket, written by the count stage.
+// (flux per emitted path of the pass).
 struct Photon {
-    vec3 position; uint cell;
+    vec3 position; uint pad0;
     vec3 power; uint direction;
 };
 

@@ -33,8 +33,8 @@ public:
     VkDeviceAddress address() const { return address_; }
     const std::string& name() const { return name_; }
     bool valid() const { return buffer_ != VK_NULL_HANDLE; }
-    // A view of the buffer as 4 x uint32 texels (R32G32B32A32_UINT), for a uniform texel buffer
-    // binding; created at the first call. Throws when the buffer holds more texels than
+    // A view of the buffer as 4 x uint32 texels (R32G32B32A32_UINT), for a uniform or storage
+    // texel buffer binding; created at the first call. Throws when the buffer holds more texels than
     // maxTexelBufferElements (texelViewFits says beforehand; $TELESCOPE_MAX_TEXELS lowers that
     // limit for tests).
     VkBufferView texelView() const;

@@ -81,9 +81,9 @@ bool hostSpecialisation() {
 
 ComputePipeline::ComputePipeline(const Context& context, std::string shaderName, uint32_t bufferCount,
                                  uint32_t pushConstantBytes, const std::vector<SpecConstant>& spec,
-                                 uint32_t uniformBindings, uint32_t texelBindings)
+                                 uint32_t uniformBindings, uint32_t texelBindings, uint32_t storageTexelBindings)
     : context_(context), name_(std::move(shaderName)), bufferCount_(bufferCount), pushBytes_(pushConstantBytes),
-      uniformBindings_(uniformBindings), texelBindings_(texelBindings) {
+      uniformBindings_(uniformBindings), texelBindings_(texelBindings), storageTexelBindings_(storageTexelBindings) {
     VkDevice device = context.device();
     try {
         auto code = readSpirv(shaderDirectory() + "/" + name_ + ".spv");
@@ -109,10 +109,13 @@ ComputePipeline::ComputePipeline(const Context& context, std::string shaderName,
         VK_CHECK(vkCreateShaderModule(device, &moduleInfo, nullptr, &module_));
 
         std::vector<VkDescriptorSetLayoutBinding> bindings(bufferCount);
-        uint32_t typeCounts[3] = {0, 0, 0};  // storage, uniform, texel
+        const VkDescriptorType types[4] = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
+                                           VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER,
+                                           VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER};
+        uint32_t typeCounts[4] = {0, 0, 0, 0};
         for (uint32_t i = 0; i < bufferCount; ++i) {
             bindings[i] = {i, descriptorType(i), 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
-            ++typeCounts[(texelBindings >> i) & 1u ? 2 : (uniformBindings >> i) & 1u ? 1 : 0];
+            for (int t = 0; t < 4; ++t) typeCounts[t] += types[t] == descriptorType(i);
         }
         VkDescriptorSetLayoutCreateInfo setInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
         setInfo.bindingCount = bufferCount;
@@ -145,9 +148,7 @@ ComputePipeline::ComputePipeline(const Context& context, std::string shaderName,
 
         if (bufferCount) {
             std::vector<VkDescriptorPoolSize> sizes;
-            const VkDescriptorType types[3] = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
-                                               VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER};
-            for (int t = 0; t < 3; ++t)
+            for (int t = 0; t < 4; ++t)
                 if (typeCounts[t]) sizes.push_back({types[t], typeCounts[t]});
             VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
             poolInfo.maxSets = 1;
@@ -170,6 +171,7 @@ ComputePipeline::~ComputePipeline() { release(); }
 
 VkDescriptorType ComputePipeline::descriptorType(uint32_t binding) const {
     if ((texelBindings_ >> binding) & 1u) return VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+    if ((storageTexelBindings_ >> binding) & 1u) return VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
     return (uniformBindings_ >> binding) & 1u ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
 }
 
@@ -202,7 +204,7 @@ void ComputePipeline::bindBuffers(const std::vector<const Buffer*>& buffers) {
         writes[i].dstBinding = uint32_t(i);
         writes[i].descriptorCount = 1;
         writes[i].descriptorType = type;
-        if (type == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER) {
+        if (type == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER || type == VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER) {
             views[i] = buffers[i]->texelView();
             writes[i].pTexelBufferView = &views[i];
             continue;
@@ -228,7 +230,7 @@ std::vector<std::unique_ptr<ComputePipeline>> createComputePipelines(const Conte
     for (const PipelineDesc& d : descs)
         pending.push_back(std::async(std::launch::async, [&context, &d] {
             return std::make_unique<ComputePipeline>(context, d.shaderName, d.bufferCount, d.pushConstantBytes, d.spec,
-                                                     d.uniformBindings, d.texelBindings);
+                                                     d.uniformBindings, d.texelBindings, d.storageTexelBindings);
         }));
     std::vector<std::unique_ptr<ComputePipeline>> out;
     std::exception_ptr error;

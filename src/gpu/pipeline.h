@@ -44,10 +44,11 @@ bool hostSpecialisation();
 class ComputePipeline {
 public:
     // Binding i is a storage buffer; a uniform buffer when bit i of uniformBindings is set; a
-    // uniform texel buffer (Buffer::texelView, 4 x uint32 texels) when bit i of texelBindings is set.
+    // uniform texel buffer (Buffer::texelView, 4 x uint32 texels) when bit i of texelBindings is
+    // set, a storage texel buffer when bit i of storageTexelBindings is.
     ComputePipeline(const Context& context, std::string shaderName, uint32_t bufferCount,
                     uint32_t pushConstantBytes, const std::vector<SpecConstant>& spec = {},
-                    uint32_t uniformBindings = 0, uint32_t texelBindings = 0);
+                    uint32_t uniformBindings = 0, uint32_t texelBindings = 0, uint32_t storageTexelBindings = 0);
     ~ComputePipeline();
     ComputePipeline(const ComputePipeline&) = delete;
     ComputePipeline& operator=(const ComputePipeline&) = delete;
@@ -69,7 +70,7 @@ private:
 
     const Context& context_;
     std::string name_;
-    uint32_t bufferCount_ = 0, pushBytes_ = 0, uniformBindings_ = 0, texelBindings_ = 0;
+    uint32_t bufferCount_ = 0, pushBytes_ = 0, uniformBindings_ = 0, texelBindings_ = 0, storageTexelBindings_ = 0;
     VkShaderModule module_ = VK_NULL_HANDLE;
     VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
     VkPipelineLayout layout_ = VK_NULL_HANDLE;
@@ -86,6 +87,7 @@ struct PipelineDesc {
     std::vector<SpecConstant> spec;
     uint32_t uniformBindings = 0;
     uint32_t texelBindings = 0;
+    uint32_t storageTexelBindings = 0;
 };
 
 // Creates the pipelines on parallel host threads, returned in the order given. What a pipeline

@@ -25,11 +25,20 @@ uint32_t hi(VkDeviceAddress a) { return uint32_t(a >> 32); }
 
 PhotonMap::PhotonMap(gpu::Context& context, uint64_t capacity) : context_(context) {
     header_ = gpu::Buffer(context, sizeof(shader::PhotonMapHeader), "photon map header");
-    std::vector<gpu::PipelineDesc> stages;
-    for (uint32_t stage = shader::kGridStageClear; stage <= shader::kGridStageScatter; ++stage)
-        stages.push_back({"hash_grid_build", 1, uint32_t(sizeof(shader::HashGridPush)), {{shader::kSpecGridStage, stage}}, 0, 1u});
-    stages_ = gpu::createComputePipelines(context, stages);
     allocate(std::max<uint64_t>(capacity, 1));
+}
+
+// hash_grid_build's bindings: the sorted photons (texels), the photons (texels), the sorted photons
+// (storage texels); kSpecSortedTexels says whether the stages use them or reach the arrays by address.
+gpu::PipelineDesc PhotonMap::stageDesc(uint32_t stage, bool texels, uint32_t kernel) {
+    using namespace shader;
+    return {"hash_grid_build", 3, uint32_t(sizeof(HashGridPush)),
+            {{kSpecGridStage, stage}, {kSpecPhotonKernel, kernel}, {kSpecSortedTexels, texels}}, 0, 3u, 4u};
+}
+
+void PhotonMap::bindStage(gpu::ComputePipeline& pipeline, bool texels) const {
+    // Without texels the bindings only need some buffer.
+    pipeline.bindBuffers({texels ? &sorted_ : &header_, texels ? &photons_ : &header_, texels ? &sorted_ : &header_});
 }
 
 void PhotonMap::allocate(uint64_t capacity) {
@@ -53,7 +62,15 @@ void PhotonMap::allocate(uint64_t capacity) {
     }
     scanScratch_ = gpu::Buffer(context_, std::max<uint64_t>(scratch, 1) * 4, "hash grid scan block totals");
     ++generation_;
-    for (auto& stage : stages_) stage->bindBuffers({&gatherTexels()});
+    // The stages are built for texels or addresses: again when the map crosses the texel limit.
+    if (stages_.empty() || stagesTexels_ != texelsFit()) {
+        stagesTexels_ = texelsFit();
+        std::vector<gpu::PipelineDesc> stages;
+        for (uint32_t stage = shader::kGridStageClear; stage <= shader::kGridStageScatter; ++stage)
+            stages.push_back(stageDesc(stage, stagesTexels_));
+        stages_ = gpu::createComputePipelines(context_, stages);
+    }
+    for (auto& stage : stages_) bindStage(*stage, stagesTexels_);
 }
 
 bool PhotonMap::texelsFit() const { return gpu::Buffer::texelViewFits(context_, sorted_.size()); }
@@ -174,10 +191,10 @@ std::vector<glm::vec4> PhotonMap::query(const std::vector<glm::vec3>& positions,
                                         bool byAddress) {
     using namespace shader;
     const bool texels = texelsFit() && !byAddress;
-    gpu::ComputePipeline pipeline(context_, "hash_grid_build", 1, uint32_t(sizeof(HashGridPush)),
-                                  {{kSpecGridStage, kGridStageQuery}, {kSpecPhotonKernel, kernel}, {kSpecSortedTexels, texels}},
-                                  0, 1u);
-    pipeline.bindBuffers({texels ? &sorted_ : &header_});
+    const gpu::PipelineDesc d = stageDesc(kGridStageQuery, texels, kernel);
+    gpu::ComputePipeline pipeline(context_, d.shaderName, d.bufferCount, d.pushConstantBytes, d.spec, d.uniformBindings,
+                                  d.texelBindings, d.storageTexelBindings);
+    bindStage(pipeline, texels);
     std::vector<glm::vec4> in(positions.size() * 2);
     for (size_t i = 0; i < positions.size(); ++i) {
         in[2 * i] = glm::vec4(positions[i], 0.0f);

@@ -1,6 +1,7 @@
 // The photon map of one pass on the device: the photon buffer, the hash grid (per-bucket counts,
 // bucket ends after the scatter, a copy of the photons in bucket order), the prefix-sum scratch
-// and the header through which the shaders reach all of them by device address. Owns the
+// and the header through which the shaders reach all of them by device address (the photon
+// arrays also through texel buffers while they fit one: docs/PHOTON-MAPPING.md). Owns the
 // hash_grid_build pipelines (one per stage of shaders/hash_grid_build.comp).
 //
 // Memory per photon of capacity: 32 bytes (Photon) + 32 (its copy in bucket order) + 8 per hash
@@ -68,12 +69,15 @@ private:
     void allocate(uint64_t capacity);
     void recordStage(gpu::CommandBatch& batch, uint32_t stage, const shader::HashGridPush& push, uint64_t threads);
     shader::HashGridPush basePush() const;
+    static gpu::PipelineDesc stageDesc(uint32_t stage, bool texels, uint32_t kernel = 0);
+    void bindStage(gpu::ComputePipeline& pipeline, bool texels) const;
 
     gpu::Context& context_;
     uint64_t capacity_ = 0;
     uint32_t tableSize_ = 0;
     float cellSize_ = 1.0f;
     uint64_t generation_ = 0;
+    bool stagesTexels_ = false;  // the stages' kSpecSortedTexels
     gpu::Buffer header_, photons_, sorted_, cellCount_, cellStart_, scanScratch_;
     std::vector<uint64_t> scanLevelOffsets_;  // element offset of each block-total level in scanScratch_
     std::vector<uint32_t> scanLevelCounts_;   // elements of level 0 (the table), 1, 2, ...

@@ -313,7 +313,7 @@ private:
             const gpu::PipelineDesc d = gatherDesc(texels);
             pipelines_[1] = std::make_unique<gpu::ComputePipeline>(map_.context(), d.shaderName, d.bufferCount,
                                                                    d.pushConstantBytes, d.spec, d.uniformBindings,
-                                                                   d.texelBindings);
+                                                                   d.texelBindings, d.storageTexelBindings);
             gatherTexels_ = texels;
         }
         std::vector<const gpu::Buffer*> bound = scene_;
