@@ -1,5 +1,5 @@
-// hash_grid_build: the photon hash grid on the device, one stage per pipeline (kSpecGridStage):
-// clear the per-bucket counts, count photons per bucket, exclusive prefix sum of the counts
+// hash_grid_build: the photon hash grid on the device, one stage per pipeline (kSpecGridStage),
+// after the host has cleared the per-bucket counts (vkCmdFillBuffer): count photons per bucket, exclusive prefix sum of the counts
 // (1024-element blocks, block totals scanned recursively, then added back), and scatter copies of
 // the photons into bucket order (so that a gather reads each bucket contiguously). After the scatter cellStart[h] holds the END of bucket h's range,
 // which starts at cellStart[h] - cellCount[h]; the scan of the counts also records the fullest
@@ -17,7 +17,7 @@
 #include "shared/photon_density.h"
 
 layout(local_size_x = kGridGroupSize) in;
-layout(constant_id = kSpecGridStage) const uint kStage = kGridStageClear;
+layout(constant_id = kSpecGridStage) const uint kStage = kGridStageCount;
 layout(constant_id = kSpecPhotonKernel) const uint kKernel = kKernelCone;
 layout(push_constant) uniform Push { HashGridPush pc; };
 
@@ -89,9 +89,7 @@ void main() {
     UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
     uint id = gl_GlobalInvocationID.x;
 
-    if (kStage == kGridStageClear) {
-        for (uint i = id; i < map.h.tableSize; i += threadCount()) cellCount.v[i] = 0u;
-    } else if (kStage == kGridStageCount) {
+    if (kStage == kGridStageCount) {
         // The scatter computes the same bucket again from the position (cheaper than storing it).
         for (uint i = id; i < stored; i += threadCount()) {
             vec3 p = kSortedTexels ? uintBitsToFloat(texelFetch(photonTexels, int(2u * i)).xyz) : photons.p[i].position;

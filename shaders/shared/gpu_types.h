@@ -256,12 +256,12 @@ CONST uint kSpecSortedTexels = 56u;      // gatherPhotons reads the sorted photo
 
 
 
-CONST uint kGridStageClear = 0u;    // cellCount = 0
-CONST uint kGridStageCount = 1u;    // photon -> cell hash, cellCount[h]++
-CONST uint kGridStageScan = 2u;     // exclusive scan of 1024-element blocks, block totals out
-CONST uint kGridStageAdd = 3u;      // adds the scanned block totals back
-CONST uint kGridStageScatter = 4u;  // sorted[cellStart[h]++] = photon (a copy, read in order by the gather)
-CONST uint kGridStageQuery = 5u;    // kernel sums at query points (tests)
+// (Before the count, the host clears cellCount with vkCmdFillBuffer.)
+CONST uint kGridStageCount = 0u;    // photon -> cell hash, cellCount[h]++
+CONST uint kGridStageScan = 1u;     // exclusive scan of 1024-element blocks, block totals out
+CONST uint kGridStageAdd = 2u;      // adds the scanned block totals back
+CONST uint kGridStageScatter = 3u;  // sorted[cellStart[h]++] = photon (a copy, read in order by the gather)
+CONST uint kGridStageQuery = 4u;    // kernel sums at query points (tests)
 
 // The gather's bindings: the scene's (kSceneBindingCount), then the sorted photons as a uniform
 // texel buffer (photon_gather.glsl).
