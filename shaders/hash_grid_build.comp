@@ -34,6 +34,9 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4ArrayRe
 layout(binding = 0) uniform usamplerBuffer sortedTexels;
 layout(binding = 1) uniform usamplerBuffer photonTexels;
 layout(binding = 2, rgba32ui) uniform writeonly uimageBuffer sortedImage;
+// The table's counts and starts, 4 buckets a texel (the scan and add of the table's own level).
+layout(binding = 3) uniform usamplerBuffer countTexels;
+layout(binding = 4, rgba32ui) uniform uimageBuffer startImage;
 #include "photon_gather.glsl"
 
 // Per subgroup of the workgroup: its total and its largest count (at most one subgroup per thread).
@@ -54,10 +57,14 @@ void scanBlock() {
     uint first = gl_WorkGroupID.x * kScanBlock + t * 4u;
     uint v[4];
     uint total = 0u;
-    for (uint k = 0u; k < 4u; ++k) {
-        v[k] = first + k < pc.count ? src.v[first + k] : 0u;
-        total += v[k];
+    bool texels = kSortedTexels && pc.tableTexels != 0u;  // the table: a whole number of blocks
+    if (texels) {
+        uvec4 q = texelFetch(countTexels, int(first / 4u));
+        v = uint[4](q.x, q.y, q.z, q.w);
+    } else {
+        for (uint k = 0u; k < 4u; ++k) v[k] = first + k < pc.count ? src.v[first + k] : 0u;
     }
+    for (uint k = 0u; k < 4u; ++k) total += v[k];
     uint inclusive = subgroupInclusiveAdd(total);
     uint largest = subgroupMax(max(max(v[0], v[1]), max(v[2], v[3])));
     if (gl_SubgroupInvocationID == gl_SubgroupSize - 1u) {
@@ -67,9 +74,15 @@ void scanBlock() {
     barrier();
     uint running = inclusive - total;  // exclusive prefix of this thread within its subgroup
     for (uint k = 0u; k < gl_SubgroupID; ++k) running += subgroupTotals[k];
-    for (uint k = 0u; k < 4u; ++k) {
-        if (first + k < pc.count) dst.v[first + k] = running;
-        running += v[k];
+    if (texels) {
+        uvec4 starts = running + uvec4(0u, v[0], v[0] + v[1], v[0] + v[1] + v[2]);
+        imageStore(startImage, int(first / 4u), starts);
+        running += v[0] + v[1] + v[2] + v[3];
+    } else {
+        for (uint k = 0u; k < 4u; ++k) {
+            if (first + k < pc.count) dst.v[first + k] = running;
+            running += v[k];
+        }
     }
     if (t == kGridGroupSize - 1u && (pc.sumsLo != 0u || pc.sumsHi != 0u))
         UintArrayRef(uvec2(pc.sumsLo, pc.sumsHi)).v[gl_WorkGroupID.x] = running;  // the block total
@@ -100,7 +113,12 @@ void main() {
     } else if (kStage == kGridStageAdd) {
         UintArrayRef dst = UintArrayRef(uvec2(pc.dstLo, pc.dstHi));
         UintArrayRef sums = UintArrayRef(uvec2(pc.sumsLo, pc.sumsHi));
-        for (uint i = id; i < pc.count; i += threadCount()) dst.v[i] += sums.v[i / kScanBlock];
+        if (kSortedTexels && pc.tableTexels != 0u) {
+            for (uint i = id; i < pc.count / 4u; i += threadCount())
+                imageStore(startImage, int(i), imageLoad(startImage, int(i)) + sums.v[i / (kScanBlock / 4u)]);
+        } else {
+            for (uint i = id; i < pc.count; i += threadCount()) dst.v[i] += sums.v[i / kScanBlock];
+        }
     } else if (kStage == kGridStageScatter) {
         PhotonArrayRef sorted = PhotonArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
         for (uint i = id; i < stored; i += threadCount()) {

@@ -325,7 +325,8 @@ struct HashGridPush {
     float logStep2;            // query: ln(r_{j+1}^2 / r_j^2)
     uint sliceBegin;           // query: first photon of each bucket this dispatch reads
     uint recordMax;            // scan: 1 when the input is the bucket counts (sets maxBucket)
-    uint pad0; uint pad1;
+    uint tableTexels;          // scan / add: 1 for the table's own level, read and written as texels
+    uint pad1;
 };
 
 // One gather dispatch: slice `slice` of `sliceCount` of a photon pass. Unbiased photon mapping:

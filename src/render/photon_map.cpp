@@ -32,13 +32,15 @@ PhotonMap::PhotonMap(gpu::Context& context, uint64_t capacity) : context_(contex
 // (storage texels); kSpecSortedTexels says whether the stages use them or reach the arrays by address.
 gpu::PipelineDesc PhotonMap::stageDesc(uint32_t stage, bool texels, uint32_t kernel) {
     using namespace shader;
-    return {"hash_grid_build", 3, uint32_t(sizeof(HashGridPush)),
-            {{kSpecGridStage, stage}, {kSpecPhotonKernel, kernel}, {kSpecSortedTexels, texels}}, 0, 3u, 4u};
+    return {"hash_grid_build", 5, uint32_t(sizeof(HashGridPush)),
+            {{kSpecGridStage, stage}, {kSpecPhotonKernel, kernel}, {kSpecSortedTexels, texels}}, 0, 1u | 2u | 8u, 4u | 16u};
 }
 
 void PhotonMap::bindStage(gpu::ComputePipeline& pipeline, bool texels) const {
     // Without texels the bindings only need some buffer.
-    pipeline.bindBuffers({texels ? &sorted_ : &header_, texels ? &photons_ : &header_, texels ? &sorted_ : &header_});
+    const gpu::Buffer* stand = &header_;
+    pipeline.bindBuffers({texels ? &sorted_ : stand, texels ? &photons_ : stand, texels ? &sorted_ : stand,
+                          texels ? &cellCount_ : stand, texels ? &cellStart_ : stand});
 }
 
 void PhotonMap::allocate(uint64_t capacity) {
@@ -154,6 +156,7 @@ void PhotonMap::recordBuild(gpu::CommandBatch& batch) {
         p.sumsLo = lo(sums), p.sumsHi = hi(sums);
         p.count = scanLevelCounts_[level];
         p.recordMax = level == 0 ? 1u : 0u;
+        p.tableTexels = level == 0 ? 1u : 0u;
         uint32_t blocks = (p.count + kScanBlock - 1) / kScanBlock;
         batch.dispatch(*stages_[kGridStageScan], &p, sizeof(p), blocks, 1, 1, "hash_grid_build");
     }
@@ -162,7 +165,8 @@ void PhotonMap::recordBuild(gpu::CommandBatch& batch) {
         VkDeviceAddress dst = levelAddress(level), sums = levelAddress(level + 1);
         p.dstLo = lo(dst), p.dstHi = hi(dst), p.sumsLo = lo(sums), p.sumsHi = hi(sums);
         p.count = scanLevelCounts_[level];
-        recordStage(batch, kGridStageAdd, p, p.count);
+        p.tableTexels = level == 0 ? 1u : 0u;
+        recordStage(batch, kGridStageAdd, p, level == 0 ? p.count / 4 : p.count);
     }
     recordStage(batch, kGridStageScatter, push, capacity_);
 }
