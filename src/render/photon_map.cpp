@@ -139,7 +139,7 @@ void PhotonMap::recordStage(gpu::CommandBatch& batch, uint32_t stage, const shad
 void PhotonMap::recordBuild(gpu::CommandBatch& batch) {
     using namespace shader;
     shader::HashGridPush push = basePush();
-    batch.fill(cellCount_, 0u, "hash_grid_build");  // memset speed (a clearing stage ran at 1-2 GB/s)
+    batch.fill(cellCount_, 0u, "hash_grid_build");  // not a clearing stage: docs/BENCHMARKS.photon-notes.md
     recordStage(batch, kGridStageCount, push, capacity_);
 
     // ---- Exclusive scan of the bucket counts: block scans up the levels, then adds down ----
