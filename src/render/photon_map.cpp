@@ -28,12 +28,14 @@ PhotonMap::PhotonMap(gpu::Context& context, uint64_t capacity) : context_(contex
     allocate(std::max<uint64_t>(capacity, 1));
 }
 
-// hash_grid_build's bindings: the sorted photons (texels), the photons (texels), the sorted photons
-// (storage texels); kSpecSortedTexels says whether the stages use them or reach the arrays by address.
+// hash_grid_build's bindings (hash_grid_build.comp): 0 the sorted photons, 1 the photons, 3 the
+// bucket counts as texels; 2 the sorted photons, 4 the bucket starts as storage texels.
+// kSpecSortedTexels says whether the stages use them or reach the arrays by address.
 gpu::PipelineDesc PhotonMap::stageDesc(uint32_t stage, bool texels, uint32_t kernel) {
     using namespace shader;
+    constexpr uint32_t kTexels = (1u << 0) | (1u << 1) | (1u << 3), kStorageTexels = (1u << 2) | (1u << 4);
     return {"hash_grid_build", 5, uint32_t(sizeof(HashGridPush)),
-            {{kSpecGridStage, stage}, {kSpecPhotonKernel, kernel}, {kSpecSortedTexels, texels}}, 0, 1u | 2u | 8u, 4u | 16u};
+            {{kSpecGridStage, stage}, {kSpecPhotonKernel, kernel}, {kSpecSortedTexels, texels}}, 0, kTexels, kStorageTexels};
 }
 
 void PhotonMap::bindStage(gpu::ComputePipeline& pipeline, bool texels) const {
@@ -75,7 +77,11 @@ void PhotonMap::allocate(uint64_t capacity) {
     for (auto& stage : stages_) bindStage(*stage, stagesTexels_);
 }
 
-bool PhotonMap::texelsFit() const { return gpu::Buffer::texelViewFits(context_, sorted_.size()); }
+bool PhotonMap::texelsFit() const {
+    for (const gpu::Buffer* b : {&photons_, &sorted_, &cellCount_, &cellStart_})
+        if (!gpu::Buffer::texelViewFits(context_, b->size())) return false;
+    return true;
+}
 
 uint64_t PhotonMap::deviceBytes() const {
     return photons_.size() + sorted_.size() + cellCount_.size() + cellStart_.size() + scanScratch_.size() + header_.size();
