@@ -24,6 +24,7 @@ layout(std430, binding = kBindingLights) readonly buffer LightBuffer { LightGpu 
 MaterialGpu sceneMaterial(uint i) { return materials[i]; }
 LightGpu sceneLight(uint i) { return lights[i]; }
 
+#define SCENE_UNIFORM_INDEX_HIDDEN  // scene_geometry.glsl: no shader compiled again per pass
 #include "scene_geometry.glsl"
 
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer PhotonMapRef { PhotonMapHeader h; };

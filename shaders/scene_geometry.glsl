@@ -8,13 +8,29 @@ layout(constant_id = kSpecSceneInUniforms) const bool kSceneInUniforms = false;
 layout(std140, binding = kBindingBvhUniform) uniform BvhUniform { BvhNode uniformNodes[kMaxUniformNodes]; };
 layout(std140, binding = kBindingPrimsUniform) uniform PrimUniform { Prim uniformPrims[kMaxUniformPrims]; };
 
+// Lavapipe (Mesa 22.3) inlines uniform-buffer values read at constant offsets that decide a
+// branch: each time such a pipeline is bound it compiles a new shader with the values folded in,
+// and never frees it, as long as the folding removes half of the shader. photon_trace's unrolled
+// brute-force loop reads every primitive at a constant offset, so it was compiled again in every
+// pass: about 1.2 MB of memory and 10 ms per pass on the point-light plane
+// (docs/BENCHMARKS.photon-notes.md). With SCENE_UNIFORM_INDEX_HIDDEN the index gets a zero the
+// compiler cannot see (gl_NumWorkGroups.z is at least 1), so no offset is constant; the loads stay
+// uniform-buffer loads. The path tracer keeps constant offsets: lavapipe tries its inlining once
+// and drops it (too little of the shader goes), and the hidden zero cost it 1.4% of its paths/s.
+// Stability.RepeatedPassesDoNotGrowTheProcess checks both.
+#ifdef SCENE_UNIFORM_INDEX_HIDDEN
+uint uniformIndex(uint i) { return i + uint(gl_NumWorkGroups.z == 0u); }
+#else
+uint uniformIndex(uint i) { return i; }
+#endif
+
 // (Functions, not ?: : the uniform and storage structs are distinct SPIR-V types.)
 BvhNode sceneNode(uint i) {
-    if (kSceneInUniforms) return uniformNodes[i];
+    if (kSceneInUniforms) return uniformNodes[uniformIndex(i)];
     return nodes[i];
 }
 Prim scenePrim(uint i) {
-    if (kSceneInUniforms) return uniformPrims[i];
+    if (kSceneInUniforms) return uniformPrims[uniformIndex(i)];
     return prims[i];
 }
 #define BVH_NODE(i) sceneNode(i)
