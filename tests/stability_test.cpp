@@ -426,6 +426,11 @@ TEST_F(Stability, RepeatedPassesDoNotGrowTheProcess) {
     // constant uniform offsets back in photon_trace the plane grew by more than 1 MB a pass
     // (docs/TESTING.md). The path tracer on the Cornell box (brute-force primitives in uniform
     // buffers, the same pattern) is held to the same bound.
+#if defined(__SANITIZE_ADDRESS__)
+    // AddressSanitizer keeps freed memory resident (its quarantine, 256 MB), so the process grows
+    // by what it frees: 53 MB a photon pass here, 138 KB with the quarantine off.
+    GTEST_SKIP() << "resident memory is not a measure under AddressSanitizer (its quarantine)";
+#endif
     const double bound = 128.0 * 1024.0;
     const Scene photons = loadTestScene("scenes/point-plane-photon.json", {{"camera.resolution", "[16,16]"}});
     const double photonGrowth = growthPerPass(photons, 40);
