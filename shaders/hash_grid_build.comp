@@ -1,10 +1,12 @@
-// hash_grid_build: the photon hash grid on the device, one stage per pipeline (kSpecGridStage),
-// after the host has cleared the per-bucket counts (vkCmdFillBuffer): count photons per bucket, exclusive prefix sum of the counts
-// (1024-element blocks, block totals scanned recursively, then added back), and scatter copies of
-// the photons into bucket order (so that a gather reads each bucket contiguously). After the scatter cellStart[h] holds the END of bucket h's range,
-// which starts at cellStart[h] - cellCount[h]; the scan of the counts also records the fullest
-// bucket (PhotonMapHeader::maxBucket), from which the host sizes the gather's slices. The query
-// stage evaluates one slice of gatherPhotons() at given points (tests).
+// hash_grid_build: the photon hash grid on the device, one stage per pipeline (kSpecGridStage):
+// count photons per bucket, exclusive prefix sum of the counts (kScanBlock-element blocks, block
+// totals scanned recursively, then added back), and scatter copies of the photons into bucket
+// order (so that a gather reads each bucket contiguously). After the scatter cellStart[h] holds the
+// END of bucket h's range, which is where bucket h + 1's begins: a gather reads a bucket's range
+// from two neighbouring entries, and the counts are not needed after the scan, which zeroes them
+// as it reads them (the next pass's count starts from zero with no clearing pass). The scan of the
+// counts also records the fullest bucket (PhotonMapHeader::maxBucket), from which the host sizes
+// the gather's slices. The query stage evaluates one slice of gatherPhotons() at given points (tests).
 // Loops are grid-stride over at most 4096 x 256 threads, so a thread runs at most 2^31 / 2^20 =
 // 2048 iterations (lavapipe stops the loops of an invocation after 65535 iterations in all).
 #version 460
@@ -35,7 +37,7 @@ layout(binding = 0) uniform usamplerBuffer sortedTexels;
 layout(binding = 1) uniform usamplerBuffer photonTexels;
 layout(binding = 2, rgba32ui) uniform writeonly uimageBuffer sortedImage;
 // The table's counts and starts, 4 buckets a texel (the scan and add of the table's own level).
-layout(binding = 3) uniform usamplerBuffer countTexels;
+layout(binding = 3, rgba32ui) uniform uimageBuffer countImage;
 layout(binding = 4, rgba32ui) uniform uimageBuffer startImage;
 #include "photon_gather.glsl"
 
@@ -46,40 +48,57 @@ shared uint subgroupMaxima[kGridGroupSize];
 uint threadCount() { return gl_NumWorkGroups.x * kGridGroupSize; }
 
 
-// Exclusive scan of one block of kScanBlock elements: 4 per thread, the thread totals scanned
-// within each subgroup (subgroupInclusiveAdd), then across the subgroups through shared memory
-// with one barrier (a Hillis-Steele scan over the 256 threads took 16 barriers, and on lavapipe
-// each barrier switches every invocation of the workgroup), then the block total to sums[block].
+// Exclusive scan of one block of kScanBlock elements: 16 per thread (4 texels), the thread totals
+// scanned within each subgroup (subgroupInclusiveAdd), then across the subgroups through shared
+// memory with one barrier (a Hillis-Steele scan over the 256 threads took 16 barriers, and on
+// lavapipe each barrier switches every invocation of the workgroup), then the block total to
+// sums[block]. 16 elements a thread rather than 4 made the table's scan about 2x cheaper on
+// lavapipe (docs/BENCHMARKS.photon-notes.md): a quarter of the subgroup operations and barriers.
 void scanBlock() {
     UintArrayRef src = UintArrayRef(uvec2(pc.srcLo, pc.srcHi));
     UintArrayRef dst = UintArrayRef(uvec2(pc.dstLo, pc.dstHi));
     uint t = gl_LocalInvocationID.x;
-    uint first = gl_WorkGroupID.x * kScanBlock + t * 4u;
-    uint v[4];
+    const uint kPer = kScanBlock / kGridGroupSize;  // elements per thread
+    uint first = gl_WorkGroupID.x * kScanBlock + t * kPer;
+    uint v[kPer];
     uint total = 0u;
-    bool texels = kSortedTexels && pc.tableTexels != 0u;  // the table: a whole number of blocks
+    bool texels = kSortedTexels && pc.tableLevel != 0u;  // the table: a whole number of blocks
+    // The bucket counts are read once, here: each is zeroed for the next pass's count.
     if (texels) {
-        uvec4 q = texelFetch(countTexels, int(first / 4u));
-        v = uint[4](q.x, q.y, q.z, q.w);
+        for (uint q = 0u; q < kPer / 4u; ++q) {
+            uvec4 c = imageLoad(countImage, int(first / 4u + q));
+            imageStore(countImage, int(first / 4u + q), uvec4(0u));
+            v[4u * q] = c.x, v[4u * q + 1u] = c.y, v[4u * q + 2u] = c.z, v[4u * q + 3u] = c.w;
+        }
     } else {
-        for (uint k = 0u; k < 4u; ++k) v[k] = first + k < pc.count ? src.v[first + k] : 0u;
+        for (uint k = 0u; k < kPer; ++k) {
+            v[k] = first + k < pc.count ? src.v[first + k] : 0u;
+            if (pc.tableLevel != 0u && first + k < pc.count) src.v[first + k] = 0u;
+        }
     }
-    for (uint k = 0u; k < 4u; ++k) total += v[k];
+    uint largestHere = 0u;
+    for (uint k = 0u; k < kPer; ++k) total += v[k], largestHere = max(largestHere, v[k]);
     uint inclusive = subgroupInclusiveAdd(total);
-    uint largest = subgroupMax(max(max(v[0], v[1]), max(v[2], v[3])));
+    uint largest = subgroupMax(largestHere);
     if (gl_SubgroupInvocationID == gl_SubgroupSize - 1u) {
         subgroupTotals[gl_SubgroupID] = inclusive;
         subgroupMaxima[gl_SubgroupID] = largest;
     }
     barrier();
-    uint running = inclusive - total;  // exclusive prefix of this thread within its subgroup
-    for (uint k = 0u; k < gl_SubgroupID; ++k) running += subgroupTotals[k];
+    // Exclusive prefix of this thread: within its subgroup, plus the totals of the subgroups before
+    // it, which its lanes read a few each and add up together (a loop over all of them in every
+    // thread read 15.5 of them on average, one lane at a time on lavapipe).
+    uint before = 0u;
+    for (uint k = gl_SubgroupInvocationID; k < gl_SubgroupID; k += gl_SubgroupSize) before += subgroupTotals[k];
+    uint running = inclusive - total + subgroupAdd(before);
     if (texels) {
-        uvec4 starts = running + uvec4(0u, v[0], v[0] + v[1], v[0] + v[1] + v[2]);
-        imageStore(startImage, int(first / 4u), starts);
-        running += v[0] + v[1] + v[2] + v[3];
+        for (uint q = 0u; q < kPer / 4u; ++q) {
+            uvec4 starts = running + uvec4(0u, v[4u * q], v[4u * q] + v[4u * q + 1u], v[4u * q] + v[4u * q + 1u] + v[4u * q + 2u]);
+            imageStore(startImage, int(first / 4u + q), starts);
+            running += v[4u * q] + v[4u * q + 1u] + v[4u * q + 2u] + v[4u * q + 3u];
+        }
     } else {
-        for (uint k = 0u; k < 4u; ++k) {
+        for (uint k = 0u; k < kPer; ++k) {
             if (first + k < pc.count) dst.v[first + k] = running;
             running += v[k];
         }
@@ -88,7 +107,7 @@ void scanBlock() {
         UintArrayRef(uvec2(pc.sumsLo, pc.sumsHi)).v[gl_WorkGroupID.x] = running;  // the block total
 
     // ---- The fullest bucket: one atomic per workgroup ----
-    if (pc.recordMax == 0u || t != 0u) return;
+    if (pc.tableLevel == 0u || t != 0u) return;
     uint fullest = 0u;
     for (uint k = 0u; k < gl_NumSubgroups; ++k) fullest = max(fullest, subgroupMaxima[k]);
     atomicMax(PhotonMapRef(uvec2(pc.headerLo, pc.headerHi)).h.maxBucket, fullest);
@@ -113,7 +132,7 @@ void main() {
     } else if (kStage == kGridStageAdd) {
         UintArrayRef dst = UintArrayRef(uvec2(pc.dstLo, pc.dstHi));
         UintArrayRef sums = UintArrayRef(uvec2(pc.sumsLo, pc.sumsHi));
-        if (kSortedTexels && pc.tableTexels != 0u) {
+        if (kSortedTexels && pc.tableLevel != 0u) {
             for (uint i = id; i < pc.count / 4u; i += threadCount())
                 imageStore(startImage, int(i), imageLoad(startImage, int(i)) + sums.v[i / (kScanBlock / 4u)]);
         } else {

@@ -40,7 +40,6 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
     float cellSize = map.h.cellSize;
     uint tableSize = map.h.tableSize;
     Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
-    UintArrayRef cellCount = UintArrayRef(uvec2(map.h.cellCountLo, map.h.cellCountHi));
     UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
     float rj2 = rb2 * exp(logRadius2);
 
@@ -53,10 +52,12 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
         for (uint k = 0u; k < c; ++k) seen = seen || visited[k] == h;
         visited[c] = h;
         if (seen) continue;
-        uint count = cellCount.v[h];
+        // The scatter left the end of bucket h's range in cellStart[h], so bucket h - 1's end is
+        // where h begins (hash_grid_build.comp).
+        uint begin = h == 0u ? 0u : cellStart.v[h - 1u];
+        uint count = cellStart.v[h] - begin;
         if (sliceBegin >= count) continue;
-        uint end = cellStart.v[h];  // the scatter left the end of the bucket's range here
-        uint first = end - count + sliceBegin;
+        uint first = begin + sliceBegin;
         uint last = first + min(count - sliceBegin, kGatherSlicePhotons);
         for (uint i = first; i < last; ++i) {
             // The position first: most photons of the cells lie beyond r_b, and the rest of the

@@ -1,10 +1,11 @@
 // The device hash grid (hash_grid_build.comp + photon_gather.glsl) against a brute-force gather
 // over every photon on the CPU, with the same shared kernel code: random photons around the
 // origin (negative coordinates included), radii from 1e-4 to 1e2 of the scene size, mostly
-// empty cells at small radii, three scan levels for a large table.
+// empty cells at small radii, two scan levels for a large table, one map built again and again.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include "render/photon_map.h"
@@ -52,8 +53,9 @@ Sums bruteForce(const std::vector<Photon>& photons, glm::vec3 x, glm::vec3 n, fl
 // Photons in a cube of side `size` centred at the origin; queries at photons (displaced by up to
 // the radius) and at random points. byAddress: the gather reads the sorted photons by address, as
 // it does when they exceed the device's texel-buffer limit (else through the texel binding).
+// map: the photon map to build in (else a new one): a map built again must give the same sums.
 void compareWithBruteForce(uint32_t photonCount, float size, float radius, uint32_t kernel, uint32_t queryCount,
-                           uint32_t seed, bool byAddress = false) {
+                           uint32_t seed, bool byAddress = false, PhotonMap* map = nullptr) {
     Rng rng = rngCreate(seed, 1, 2);
     std::vector<Photon> photons(photonCount);
     for (Photon& p : photons) {
@@ -72,9 +74,10 @@ void compareWithBruteForce(uint32_t photonCount, float size, float radius, uint3
     const PhotonLevels levels{0.7f, std::log(0.70710678f), 3u, 20u};
     const float logRadius2 = photonLevelLogRadius2(levels, 3), logStep2 = levels.logAreaRatio;
 
-    PhotonMap map(sharedContext(), photonCount);
-    map.uploadPhotons(photons, 2.0f * radius);
-    std::vector<glm::vec4> got = map.query(xs, ns, radius, logRadius2, logStep2, kernel, byAddress);
+    std::unique_ptr<PhotonMap> own;
+    if (!map) map = (own = std::make_unique<PhotonMap>(sharedContext(), photonCount)).get();
+    map->uploadPhotons(photons, 2.0f * radius);
+    std::vector<glm::vec4> got = map->query(xs, ns, radius, logRadius2, logStep2, kernel, byAddress);
     ASSERT_EQ(got.size(), queryCount);
     uint32_t nonEmpty = 0;
     for (uint32_t i = 0; i < queryCount; ++i) {
@@ -109,9 +112,21 @@ TEST_F(PhotonGrid, MatchesBruteForceForEveryKernel) {
         compareWithBruteForce(5000, 2.0f, 0.1f, kernel, 256, 17 + kernel);
 }
 
-TEST_F(PhotonGrid, ThreeScanLevels) {
-    // 2.5 M photons: a table of 2^21 buckets, scanned in three levels (2^21, 2048, 2).
+TEST_F(PhotonGrid, TwoScanLevels) {
+    // 2.5 M photons: a table of 2^21 buckets, scanned in two levels (2^21, 512 block totals; the
+    // largest table, 2^24 buckets, has 4096 block totals, which one block scans).
     compareWithBruteForce(2500000, 4.0f, 0.02f, kKernelCone, 64, 23);
+}
+
+TEST_F(PhotonGrid, RebuiltMapsMatchBruteForce) {
+    // No pass clears the bucket counts: the scan zeroes each count as it reads it, for the next
+    // build (hash_grid_build.comp). Builds in one map, with other photons and cell sizes each
+    // time, must each match the brute-force gather (a count left over would shift every bucket).
+    PhotonMap map(sharedContext(), 20000);
+    compareWithBruteForce(20000, 10.0f, 0.1f, kKernelCone, 256, 43, false, &map);
+    compareWithBruteForce(5000, 2.0f, 0.1f, kKernelEpanechnikov, 256, 47, false, &map);
+    compareWithBruteForce(20000, 10.0f, 1.0f, kKernelCone, 256, 53, false, &map);
+    compareWithBruteForce(20000, 10.0f, 0.3f, kKernelCone, 256, 59, true, &map);
 }
 
 TEST_F(PhotonGrid, CrowdedCellsMatchBruteForce) {

@@ -256,9 +256,10 @@ CONST uint kSpecSortedTexels = 56u;      // gatherPhotons reads the sorted photo
 
 
 
-// (Before the count, the host clears cellCount with vkCmdFillBuffer.)
+// The counts are zero before the count stage: the host clears them once, when it allocates them,
+// and the scan zeroes each count as it reads it, for the next pass.
 CONST uint kGridStageCount = 0u;    // photon -> cell hash, cellCount[h]++
-CONST uint kGridStageScan = 1u;     // exclusive scan of 1024-element blocks, block totals out
+CONST uint kGridStageScan = 1u;     // exclusive scan of kScanBlock-element blocks, block totals out
 CONST uint kGridStageAdd = 2u;      // adds the scanned block totals back
 CONST uint kGridStageScatter = 3u;  // sorted[cellStart[h]++] = photon (a copy, read in order by the gather)
 CONST uint kGridStageQuery = 4u;    // kernel sums at query points (tests)
@@ -270,7 +271,7 @@ CONST uint kGatherBindingCount = 10u;
 
 CONST uint kPhotonTraceGroupSize = 64u;
 CONST uint kGridGroupSize = 256u;
-CONST uint kScanBlock = 1024u;      // elements per scan workgroup (4 per thread)
+CONST uint kScanBlock = 4096u;      // elements per scan workgroup (16 per thread)
 CONST uint kGatherGroupSize = 8u;   // 8x8 pixel tiles
 // Lavapipe ends the loops of a shader invocation after 65535 iterations in all (one counter per
 // SIMD group for every loop of the shader, without a word). A gather therefore reads at most
@@ -324,9 +325,9 @@ struct HashGridPush {
     float logRadius2;          // query: ln(r_j^2 / r_b^2)
     float logStep2;            // query: ln(r_{j+1}^2 / r_j^2)
     uint sliceBegin;           // query: first photon of each bucket this dispatch reads
-    uint recordMax;            // scan: 1 when the input is the bucket counts (sets maxBucket)
-    uint tableTexels;          // scan / add: 1 for the table's own level, read and written as texels
-    uint pad1;
+    uint tableLevel;           // scan / add: 1 for the table's own level: the scan reads the bucket
+                               // counts (texels where the stages use them), zeroes them, sets maxBucket
+    uint pad1; uint pad2;
 };
 
 // One gather dispatch: slice `slice` of `sliceCount` of a photon pass. Unbiased photon mapping:

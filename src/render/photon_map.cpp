@@ -9,13 +9,15 @@ namespace telescope {
 
 namespace {
 constexpr uint32_t kMaxTableSize = 1u << 24;
+// The block totals of the largest table fit one block: the scan has at most two levels.
+static_assert(uint64_t(kMaxTableSize) <= uint64_t(shader::kScanBlock) * shader::kScanBlock);
 constexpr uint64_t kMaxGroups = 4096;  // grid-stride loops cover the rest
 
 // Buckets hold cells, and cells hold several photons: half a bucket per photon of capacity. (A
 // quarter made the clear, scan and add of the point-light plane 2x cheaper, but the caustic Cornell
 // box's gather 5% slower, more than the grid gained: docs/BENCHMARKS.photon-notes.md.)
 uint32_t tableSizeFor(uint64_t capacity) {
-    uint32_t t = 1024;
+    uint32_t t = shader::kScanBlock;
     while (t < capacity / 2 && t < kMaxTableSize) t <<= 1;
     return t;
 }
@@ -28,12 +30,12 @@ PhotonMap::PhotonMap(gpu::Context& context, uint64_t capacity) : context_(contex
     allocate(std::max<uint64_t>(capacity, 1));
 }
 
-// hash_grid_build's bindings (hash_grid_build.comp): 0 the sorted photons, 1 the photons, 3 the
-// bucket counts as texels; 2 the sorted photons, 4 the bucket starts as storage texels.
+// hash_grid_build's bindings (hash_grid_build.comp): 0 the sorted photons, 1 the photons as texels;
+// 2 the sorted photons, 3 the bucket counts, 4 the bucket starts as storage texels.
 // kSpecSortedTexels says whether the stages use them or reach the arrays by address.
 gpu::PipelineDesc PhotonMap::stageDesc(uint32_t stage, bool texels, uint32_t kernel) {
     using namespace shader;
-    constexpr uint32_t kTexels = (1u << 0) | (1u << 1) | (1u << 3), kStorageTexels = (1u << 2) | (1u << 4);
+    constexpr uint32_t kTexels = (1u << 0) | (1u << 1), kStorageTexels = (1u << 2) | (1u << 3) | (1u << 4);
     return {"hash_grid_build", 5, uint32_t(sizeof(HashGridPush)),
             {{kSpecGridStage, stage}, {kSpecPhotonKernel, kernel}, {kSpecSortedTexels, texels}}, 0, kTexels, kStorageTexels};
 }
@@ -53,7 +55,8 @@ void PhotonMap::allocate(uint64_t capacity) {
     photons_ = gpu::Buffer(context_, capacity * sizeof(shader::Photon), "photons");
     sorted_ = gpu::Buffer(context_, capacity * sizeof(shader::Photon), "photons in bucket order");
     cellCount_ = gpu::Buffer(context_, uint64_t(tableSize_) * 4, "hash grid bucket counts");
-    cellStart_ = gpu::Buffer(context_, uint64_t(tableSize_) * 4, "hash grid bucket ends");
+    cellCount_.fill(0);  // once: after that the scan zeroes each count as it reads it
+    cellStart_ = gpu::Buffer(context_, uint64_t(tableSize_) * 4, "hash grid bucket ends (after the scatter)");
     // Block totals of every scan level above the table.
     scanLevelCounts_ = {tableSize_};
     scanLevelOffsets_ = {0};
@@ -145,7 +148,6 @@ void PhotonMap::recordStage(gpu::CommandBatch& batch, uint32_t stage, const shad
 void PhotonMap::recordBuild(gpu::CommandBatch& batch) {
     using namespace shader;
     shader::HashGridPush push = basePush();
-    batch.fill(cellCount_, 0u, "hash_grid_build");  // not a clearing stage: docs/BENCHMARKS.photon-notes.md
     recordStage(batch, kGridStageCount, push, capacity_);
 
     // ---- Exclusive scan of the bucket counts: block scans up the levels, then adds down ----
@@ -161,8 +163,7 @@ void PhotonMap::recordBuild(gpu::CommandBatch& batch) {
         p.srcLo = lo(src), p.srcHi = hi(src), p.dstLo = lo(dst), p.dstHi = hi(dst);
         p.sumsLo = lo(sums), p.sumsHi = hi(sums);
         p.count = scanLevelCounts_[level];
-        p.recordMax = level == 0 ? 1u : 0u;
-        p.tableTexels = level == 0 ? 1u : 0u;
+        p.tableLevel = level == 0 ? 1u : 0u;
         uint32_t blocks = (p.count + kScanBlock - 1) / kScanBlock;
         batch.dispatch(*stages_[kGridStageScan], &p, sizeof(p), blocks, 1, 1, "hash_grid_build");
     }
@@ -171,7 +172,7 @@ void PhotonMap::recordBuild(gpu::CommandBatch& batch) {
         VkDeviceAddress dst = levelAddress(level), sums = levelAddress(level + 1);
         p.dstLo = lo(dst), p.dstHi = hi(dst), p.sumsLo = lo(sums), p.sumsHi = hi(sums);
         p.count = scanLevelCounts_[level];
-        p.tableTexels = level == 0 ? 1u : 0u;
+        p.tableLevel = level == 0 ? 1u : 0u;
         recordStage(batch, kGridStageAdd, p, level == 0 ? p.count / 4 : p.count);
     }
     recordStage(batch, kGridStageScatter, push, capacity_);
