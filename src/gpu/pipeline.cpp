@@ -332,27 +332,6 @@ void CommandBatch::dispatch(const ComputePipeline& pipeline, const void* push, u
     names_.push_back(name ? name : pipeline.name());
 }
 
-void CommandBatch::fill(const Buffer& buffer, uint32_t value, const char* name) {
-    if (!recording_) throw std::logic_error("CommandBatch::fill outside begin()/submitAndWait()");
-    if (count_ >= maxDispatches_)
-        throw std::logic_error(fmt::format("CommandBatch holds at most {} dispatches", maxDispatches_));
-    // After every pass before it (which may still read or write the buffer), and before every pass after it.
-    VkMemoryBarrier before{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-    before.srcAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
-    before.dstAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    vkCmdPipelineBarrier(cmd_, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &before, 0,
-                         nullptr, 0, nullptr);
-    vkCmdFillBuffer(cmd_, buffer.handle(), 0, VK_WHOLE_SIZE, value);
-    VkMemoryBarrier after{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-    after.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    after.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
-    vkCmdPipelineBarrier(cmd_, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &after, 0,
-                         nullptr, 0, nullptr);
-    ++count_;
-    if (queries_) vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_TRANSFER_BIT, queries_, count_);
-    names_.push_back(name);
-}
-
 std::vector<DispatchTiming> CommandBatch::submitAndWait() {
     if (!recording_) throw std::logic_error("CommandBatch::submitAndWait without begin()");
     recording_ = false;

@@ -117,9 +117,6 @@ public:
     // Records a dispatch of groups.x * groups.y * groups.z workgroups, named for timing.
     void dispatch(const ComputePipeline& pipeline, const void* push, uint32_t pushBytes, uint32_t groupsX,
                   uint32_t groupsY = 1, uint32_t groupsZ = 1, const char* name = nullptr);
-    // Records vkCmdFillBuffer over the whole buffer, ordered and timed like a dispatch (it counts
-    // as one against maxDispatches).
-    void fill(const Buffer& buffer, uint32_t value, const char* name);
     // Submits, waits, and returns the timings of this batch's dispatches in order.
     std::vector<DispatchTiming> submitAndWait();
     uint32_t recorded() const { return count_; }

@@ -13,9 +13,11 @@ constexpr uint32_t kMaxTableSize = 1u << 24;
 static_assert(uint64_t(kMaxTableSize) <= uint64_t(shader::kScanBlock) * shader::kScanBlock);
 constexpr uint64_t kMaxGroups = 4096;  // grid-stride loops cover the rest
 
-// Buckets hold cells, and cells hold several photons: half a bucket per photon of capacity. (A
-// quarter made the clear, scan and add of the point-light plane 2x cheaper, but the caustic Cornell
-// box's gather 5% slower, more than the grid gained: docs/BENCHMARKS.photon-notes.md.)
+// Buckets hold cells, and cells hold several photons: half a bucket per photon of capacity, so
+// that few buckets hold two cells (4-7% of the buckets hold photons on the benchmark's plane and
+// the caustic Cornell box). Smaller tables made the scan cheaper but the gather slower, by more
+// than the grid gained (1/8 of a bucket per photon: the caustic box's gather 15-20% slower;
+// docs/BENCHMARKS.photon-notes.md).
 uint32_t tableSizeFor(uint64_t capacity) {
     uint32_t t = shader::kScanBlock;
     while (t < capacity / 2 && t < kMaxTableSize) t <<= 1;
