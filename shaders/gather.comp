@@ -27,6 +27,8 @@ layout(constant_id = kSpecFilter) const uint kFilter = kFilterTent;
 layout(constant_id = kSpecPhotonEstimator) const uint kEstimator = kPhotonBiased;
 layout(constant_id = kSpecPhotonKernel) const uint kKernel = kKernelCone;
 layout(constant_id = kSpecPhotonSchedule) const uint kSchedule = kLevelScheduleUniform;
+layout(constant_id = kSpecPhotonGatherCount) const uint kGatherCount = 0u;  // k nearest (biased only), 0: all within r
+layout(constant_id = kSpecPhotonRadianceScaling) const bool kRadianceScaling = true;
 
 layout(push_constant) uniform Push { GatherPush pc; };
 
@@ -50,6 +52,8 @@ vec3 directLight(vec3 p, vec3 ng, vec3 n, vec3 albedo, inout Rng rng) {
 // the second: passes done), then the kernel sums of the slices before the last.
 const uint kBlockBaseHi = 0u, kBlockBaseLo = 1u, kBlockCorrHi = 2u, kBlockCorrLo = 3u;
 const uint kSliceBase = 4u, kSliceDifference = 5u;
+// k-nearest gathers: the k nearest photons follow (photon_gather.glsl, nearestStore).
+const uint kBlockStride = kGatherBlockVec4s + (kGatherCount + 1u) / 2u;
 
 uint passSeed(uint seed, uint passInBlock) { return passInBlock == 0u ? seed : seed ^ pcgHash(passInBlock); }
 
@@ -61,7 +65,7 @@ void main() {
     if (map.h.maxBucket > pc.sliceCount * kGatherSlicePhotons) return;  // too few slices: repeated too
     uint pixelIndex = pixel.y * pc.width + pixel.x;
     AccumRef block = AccumRef(uvec2(pc.blockLo, pc.blockHi));
-    uint bi = pixelIndex * kGatherBlockVec4s;
+    uint bi = pixelIndex * kBlockStride;
     bool lastSlice = pc.slice + 1u == pc.sliceCount;
 
     // ---- Camera ray and the level of this pass ----
@@ -106,14 +110,33 @@ void main() {
             if (lastSlice && kNextEvent && kLightCount > 0u) light += throughput * directLight(p, ng, n, m.albedo, rng);
             float rb2 = pc.radius * pc.radius;
             float logRadius2 = unbiased ? photonLevelLogRadius2(levels, level) : 0.0;
-            GatherSums sums = gatherPhotons(map, p, n, rb2, unbiased, logRadius2, pc.logAreaRatio, kKernel,
-                                            pc.slice * kGatherSlicePhotons);
+            GatherSums sums;
+            if (kGatherCount > 0u) {
+                // k nearest: the slices carry the nearest photons so far in the block buffer
+                NearestStateRef state = NearestStateRef(uvec2(pc.blockLo, pc.blockHi));
+                NearestPhotons nearest;
+                if (pc.slice == 0u) nearestClear(nearest, kGatherCount);
+                else nearestLoad(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
+                nearestSearch(map, p, rb2, kGatherCount, pc.slice * kGatherSlicePhotons, nearest);
+                if (lastSlice) {
+                    sums = nearestSums(map, nearest, n, rb2, kGatherCount, kKernel);
+                } else {
+                    nearestStore(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
+                    sums = GatherSums(vec3(0.0), vec3(0.0), 0u);
+                }
+            } else {
+                sums = gatherPhotons(map, p, n, rb2, unbiased, logRadius2, pc.logAreaRatio, kKernel,
+                                     pc.slice * kGatherSlicePhotons);
+            }
             kernelBase = f * sums.base;
             kernelDifference = f * sums.difference;
             break;
         }
         if (!kHasSpecular || !isSpecularBsdf(m.type)) break;  // null
         throughput *= scatterSpecular(m, front, n, dir, rng);
+        // Radiance, not flux, flows along the camera chain: refraction scales it (shared/bsdf.h).
+        if (kRadianceScaling && m.type == kBsdfDielectric && dot(dir, n) < 0.0)
+            throughput *= refractionRadianceScale(m, front);
         origin = offsetRayOrigin(p, ng, dir);
     }
 

@@ -75,3 +75,107 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
     }
     return s;
 }
+
+// ---- k nearest photons within r_b (Tungsten's gather_photon_count) ----
+// Tungsten's gather takes the k photons nearest to x (of any direction) within the gather radius;
+// its radius is then the k-th distance r_k when it found k, else r_b, and the estimate is
+// sum_i f Phi_i W_{r}(|x - x_i|) over those photons (uniform kernel: 1 / (pi r^2) each; the
+// k-th photon sits on the kernel's edge and counts). The search keeps the k smallest squared
+// distances and their photons' sorted indices in a fixed array (slots k.. unused); a slot whose
+// distance is +inf is empty. A gather in several slices carries the array in memory between them
+// (nearestStore / nearestLoad: two slots a uvec4).
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer NearestStateRef { uvec4 v[]; };
+
+struct NearestPhotons {
+    float d2[kMaxGatherCount];
+    uint index[kMaxGatherCount];
+};
+
+void nearestClear(inout NearestPhotons s, uint k) {
+    for (uint j = 0u; j < k; ++j) {
+        s.d2[j] = kInfinity;
+        s.index[j] = 0u;
+    }
+}
+
+// The slot holding the largest distance (the one a nearer photon replaces).
+uint nearestFarthest(NearestPhotons s, uint k) {
+    uint far = 0u;
+    for (uint j = 1u; j < k; ++j)
+        if (s.d2[j] > s.d2[far]) far = j;
+    return far;
+}
+
+// Photons sliceBegin .. sliceBegin + kGatherSlicePhotons - 1 of each bucket around x (the same
+// buckets and slices as gatherPhotons) offered to the k nearest kept in s.
+void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint k, uint sliceBegin, inout NearestPhotons s) {
+    float cellSize = map.h.cellSize;
+    uint tableSize = map.h.tableSize;
+    Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
+    UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
+    uint far = nearestFarthest(s, k);
+    float farD2 = s.d2[far];
+    ivec3 low = gridNeighbourhood(x, cellSize);
+    uint visited[8];
+    for (uint c = 0u; c < 8u; ++c) {
+        uint h = gridHash(low + ivec3(int(c & 1u), int((c >> 1u) & 1u), int(c >> 2u)), tableSize);
+        bool seen = false;
+        for (uint q = 0u; q < c; ++q) seen = seen || visited[q] == h;
+        visited[c] = h;
+        if (seen) continue;
+        uint begin = h == 0u ? 0u : cellStart.v[h - 1u];
+        uint count = cellStart.v[h] - begin;
+        if (sliceBegin >= count) continue;
+        uint first = begin + sliceBegin;
+        uint last = first + min(count - sliceBegin, kGatherSlicePhotons);
+        for (uint i = first; i < last; ++i) {
+            vec3 d = x - uintBitsToFloat(sortedTexel(sorted, 2u * i).xyz);
+            float d2 = dot(d, d);
+            if (!(d2 < rb2) || !(d2 < farD2)) continue;
+            s.d2[far] = d2;
+            s.index[far] = i;
+            far = nearestFarthest(s, k);
+            farD2 = s.d2[far];
+        }
+    }
+}
+
+// The estimate over the k nearest: kernel radius r_k^2 (the largest distance kept) when all k
+// slots are full, else r_b^2; photons arriving from behind the surface add nothing but count
+// among the k, as in Tungsten.
+GatherSums nearestSums(PhotonMapRef map, NearestPhotons s, vec3 n, float rb2, uint k, uint kernel) {
+    GatherSums g;
+    g.base = vec3(0.0);
+    g.difference = vec3(0.0);
+    g.found = 0u;
+    Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
+    float r2 = s.d2[nearestFarthest(s, k)];
+    if (!(r2 < kInfinity)) r2 = rb2;
+    for (uint j = 0u; j < k; ++j) {
+        if (!(s.d2[j] < kInfinity)) continue;
+        uvec4 rest = sortedTexel(sorted, 2u * s.index[j] + 1u);
+        g.found += 1u;
+        if (dot(decodeDirection(rest.w), n) <= 0.0) continue;
+        g.base += uintBitsToFloat(rest.xyz) * nearestKernelWeight(kernel, s.d2[j], r2);
+    }
+    return g;
+}
+
+void nearestStore(NearestStateRef state, uint at, NearestPhotons s, uint k) {
+    for (uint j = 0u; j < k; j += 2u) {
+        uint j1 = min(j + 1u, k - 1u);
+        state.v[at + j / 2u] = uvec4(floatBitsToUint(s.d2[j]), s.index[j], floatBitsToUint(s.d2[j1]), s.index[j1]);
+    }
+}
+
+void nearestLoad(NearestStateRef state, uint at, inout NearestPhotons s, uint k) {
+    for (uint j = 0u; j < k; j += 2u) {
+        uvec4 v = state.v[at + j / 2u];
+        s.d2[j] = uintBitsToFloat(v.x);
+        s.index[j] = v.y;
+        if (j + 1u < k) {
+            s.d2[j + 1u] = uintBitsToFloat(v.z);
+            s.index[j + 1u] = v.w;
+        }
+    }
+}

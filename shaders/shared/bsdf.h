@@ -77,6 +77,17 @@ FN vec3 scatterSpecular(MaterialGpu m, bool front, vec3 n, INOUT(vec3) dir, INOU
     return m.albedo;
 }
 
+// Radiance scaling of a camera path (transported radiance, not flux) that refracted through a smooth
+// dielectric: L_i / n_i^2 = L_t / n_t^2 (Veach's thesis, section 5.2), so radiance arriving from the
+// transmitted side is (n_i / n_t)^2 times what it was there. A path tracer joins camera and light in
+// the same medium, where the factors of a closed path cancel; photon mapping gathers on the far side
+// of the interface, and photons carry flux (unscaled): the camera side must carry the factor.
+// front: the camera ray arrives from outside (eta = n_t / n_i = ior).
+FN float refractionRadianceScale(MaterialGpu m, bool front) {
+    float eta = front ? m.ior : 1.0f / m.ior;
+    return 1.0f / (eta * eta);
+}
+
 // ---- Thin sheet (Tungsten's ThinSheetBsdf and Fresnel::thinFilmReflectance*): a dielectric slab
 // of index ior in vacuum, thin enough that the reflected and transmitted rays leave where they
 // entered. Reflection is specular, transmission goes straight on (a forward lobe). ----

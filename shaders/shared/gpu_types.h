@@ -249,6 +249,8 @@ SHADER_NAMESPACE_BEGIN
 CONST uint kSpecPhotonEstimator = 48u;   // kPhotonBiased or kPhotonUnbiased
 CONST uint kSpecPhotonKernel = 49u;      // kKernelCone, kKernelUniform, kKernelEpanechnikov
 CONST uint kSpecPhotonSchedule = 50u;    // kLevelSchedulePerPixel or kLevelScheduleUniform: how block levels are drawn
+CONST uint kSpecPhotonGatherCount = 51u; // k > 0: the k nearest photons within the radius (Tungsten's gather_photon_count)
+CONST uint kSpecPhotonRadianceScaling = 52u;  // 1; 0 only in tests: no 1/eta^2 on the camera side at refraction (a control)
 CONST uint kSpecPhotonNextEvent = 53u;   // direct light by next-event estimation, not photons
 CONST uint kSpecGridStage = 54u;         // hash_grid_build: which stage this pipeline runs
 CONST uint kSpecPhotonMaxBounces = 55u;  // scattering vertices of a photon path / camera chain
@@ -279,6 +281,9 @@ CONST uint kGatherGroupSize = 8u;   // 8x8 pixel tiles
 // holds more runs the gather in several slices (dispatches), each adding its part of the sums.
 CONST uint kGatherSlicePhotons = 4096u;
 CONST uint kGatherBlockVec4s = 6u;  // per-pixel block buffer of the gather (gather.comp)
+// k-nearest gathers keep the k nearest photons (squared distance, sorted index) of a pixel across
+// slices: after the block vec4s, kMaxGatherCount / 2 vec4 more per pixel.
+CONST uint kMaxGatherCount = 64u;
 
 // A stored photon: where it landed, where it came from (octahedral, 2 x snorm16) and its power
 // (flux per emitted path of the pass).

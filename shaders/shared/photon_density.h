@@ -27,6 +27,14 @@ FN float kernelShape(uint kernel, float t) {
     return 3.0f * (1.0f - t);
 }
 
+// The k-nearest gather's weight: W_r(d) with the photon at d = r (the k-th nearest, which sets r)
+// still inside the kernel (Tungsten's uniform 1 / (pi r^2) counts it; the cone and Epanechnikov
+// shapes are 0 there anyway).
+FN float nearestKernelWeight(uint kernel, float d2, float r2) {
+    if (!(r2 > 0.0f)) return 0.0f;
+    return kernelShape(kernel, sqrt(min(d2 / r2, 1.0f))) / (kPi * r2);
+}
+
 // W_r(d) from d^2 and r^2.
 FN float kernelWeight(uint kernel, float d2, float r2) {
     if (!(d2 < r2)) return 0.0f;

@@ -83,8 +83,12 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
                            "count photons per hash bucket, exclusive prefix sum, scatter; cell size = the largest "
                            "gather diameter of the pass"});
     plan.passes.push_back({"gather", "gather",
-                           fmt::format("camera paths through specular bounces to the first diffuse vertex, one "
-                                       "traversal of the 2x2x2 cells ({} kernel){}",
+                           fmt::format("camera paths through specular bounces to the first diffuse vertex (radiance "
+                                       "scaled by 1/eta^2 at each refraction), one traversal of the 2x2x2 cells ({}{} "
+                                       "kernel){}",
+                                       ph.gatherCount > 0 ? fmt::format("the {} nearest photons within the radius, ",
+                                                                        ph.gatherCount)
+                                                          : std::string(),
                                        kernelName(ph.kernel), nee ? ", direct light by next-event estimation" : "")});
     plan.skipped.push_back({"volume tracking", "photon mapping scenes have no participating media (the loader rejects them)"});
     plan.skipped.push_back({"path_trace", fmt::format("the integrator is '{}'",
@@ -154,6 +158,8 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         {kSpecPhotonKernel, uint32_t(ph.kernel)},
         {kSpecPhotonSchedule, perPixel(in) ? kLevelSchedulePerPixel : kLevelScheduleUniform},
         {kSpecPhotonNextEvent, nee},
+        {kSpecPhotonGatherCount, ph.gatherCount},
+        {kSpecPhotonRadianceScaling, ph.testRadianceScaling},
         {kSpecPhotonMaxBounces, in.maxBounces},
         {kSpecSceneInUniforms, f.fitsUniforms},
         {kSpecBruteForcePrims, f.bruteForcePrims},
@@ -177,7 +183,9 @@ public:
                          deviceSceneSpec(context, plan.photonSpec), kSceneUniformBindings},
                         gatherDesc(map_.texelsFit())})),
           trace_(*pipelines_[0]),
-          blockBuffer_(context, uint64_t(scene.camera.width) * scene.camera.height * shader::kGatherBlockVec4s * 16,
+          blockBuffer_(context,
+                       uint64_t(scene.camera.width) * scene.camera.height *
+                           (shader::kGatherBlockVec4s + (scene.integrator.photon.gatherCount + 1) / 2) * 16,
                        "gather blocks") {
         blockBuffer_.fill(0);
         // Bindings 4-6 (media in the path tracer) are declared by neither shader: any buffer will do.

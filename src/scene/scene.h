@@ -253,6 +253,13 @@ struct PhotonSettings {
     float alpha = 2.0f / 3.0f;        // progressive radius schedule (Knaus & Zwicker); "alpha"
     PhotonKernel kernel = PhotonKernel::Cone;             // "kernel"
     DirectLighting directLighting = DirectLighting::NextEvent;  // "direct_lighting"
+    // "gather_photon_count": k > 0 gathers the k nearest photons within the radius, with the kernel
+    // radius r_k their farthest distance (Tungsten's gather); 0 gathers every photon within the
+    // radius. Biased and progressive photon mapping only (the debias block needs nested kernels).
+    uint32_t gatherCount = 0;
+    // Test-only ("test_radiance_scaling"): false drops the 1/eta^2 of a refraction on the camera
+    // side, the old, wrong transport (the positive control of the refraction tests).
+    bool testRadianceScaling = true;
 };
 // "transmittance_estimator": {"type": ..., "level": k, "pmf": {...}} (docs/MEDIA.md).
 struct TransmittanceEstimatorSettings {

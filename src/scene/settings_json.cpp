@@ -145,7 +145,9 @@ void to_json(json& j, const PhotonSettings& p) {
          {"gather_radius", p.gatherRadius},
          {"alpha", p.alpha},
          {"kernel", nameOf(kPhotonKernels, p.kernel)},
-         {"direct_lighting", nameOf(kDirectLighting, p.directLighting)}};
+         {"direct_lighting", nameOf(kDirectLighting, p.directLighting)},
+         {"gather_photon_count", p.gatherCount}};
+    if (!p.testRadianceScaling) j["test_radiance_scaling"] = false;
 }
 
 void from_json(const json& j, PhotonSettings& p) {
@@ -154,6 +156,8 @@ void from_json(const json& j, PhotonSettings& p) {
     readValue(j, "alpha", p.alpha);
     readName(j, "kernel", kPhotonKernels, p.kernel);
     readName(j, "direct_lighting", kDirectLighting, p.directLighting);
+    readValue(j, "gather_photon_count", p.gatherCount);
+    p.testRadianceScaling = j.value("test_radiance_scaling", true);  // written only when false
 }
 
 // ---- Integrator ----

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "scene/photon_levels.h"
+#include "shared/gpu_types.h"
 #include "scene/transform.h"
 
 namespace telescope {
@@ -185,8 +186,23 @@ void SceneReader::readPhotonSettings(const json& v, const std::string& key) {
         readDebias(*d, "integrator.debias", true);
         readPhotonBlocks(*d, "integrator.debias");
     }
+    // Tungsten's k-nearest gather. Absent, every photon within the radius counts (Telescope's
+    // fixed-radius gather; Tungsten's own default is 20: docs/SCENE-FORMAT.md). With k nearest the
+    // kernel defaults to Tungsten's uniform one.
+    if (const json* n = find(v, "gather_photon_count")) {
+        p.gatherCount = integer(*n, "integrator.gather_photon_count", 0, shader::kMaxGatherCount);
+        if (p.gatherCount > 0 && s.debias.estimator != DebiasEstimator::None)
+            fail("integrator.gather_photon_count",
+                 fmt::format("a k-nearest gather (k = {}) cannot be debiased: the telescoping levels need nested "
+                             "fixed-radius kernels, and a k-nearest radius changes with every photon set; set "
+                             "gather_photon_count to 0 or drop the debias block", p.gatherCount));
+        if (p.gatherCount > 0 && !find(v, "kernel")) p.kernel = PhotonKernel::Uniform;
+    }
+    if (const json* t = find(v, "test_radiance_scaling"))
+        p.testRadianceScaling = boolean(*t, "integrator.test_radiance_scaling");
     ignoreUnread(v, key, {"type", "min_bounces", "max_bounces", "enable_two_sided_shading", "photon_count",
-                          "gather_radius", "alpha", "kernel", "direct_lighting", "debias"});
+                          "gather_radius", "alpha", "kernel", "direct_lighting", "debias", "gather_photon_count",
+                          "test_radiance_scaling"});
 }
 
 // Photon mapping's blocks (docs/PHOTON-MAPPING.md): the geometric level pmf (r = 0.7 by default,
