@@ -62,7 +62,7 @@ void main() {
     if (pixel.x >= pc.width || pixel.y >= pc.height) return;
     PhotonMapRef map = PhotonMapRef(uvec2(pc.headerLo, pc.headerHi));
     if (map.h.storedCount > map.h.capacity) return;  // photons were dropped: the host repeats the pass
-    if (map.h.maxBucket > pc.sliceCount * kGatherSlicePhotons) return;  // too few slices: repeated too
+    if (map.h.maxBucket > pc.sliceCount * gatherSlicePhotons(kGatherCount)) return;  // too few slices: repeated too
     uint pixelIndex = pixel.y * pc.width + pixel.x;
     AccumRef block = AccumRef(uvec2(pc.blockLo, pc.blockHi));
     uint bi = pixelIndex * kBlockStride;
@@ -117,7 +117,7 @@ void main() {
                 NearestPhotons nearest;
                 if (pc.slice == 0u) nearestClear(nearest, kGatherCount);
                 else nearestLoad(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
-                nearestSearch(map, p, rb2, kGatherCount, pc.slice * kGatherSlicePhotons, nearest);
+                nearestSearch(map, p, rb2, kGatherCount, pc.slice * gatherSlicePhotons(kGatherCount), nearest);
                 if (lastSlice) {
                     sums = nearestSums(map, nearest, n, rb2, kGatherCount, kKernel);
                 } else {

@@ -21,6 +21,7 @@
 layout(local_size_x = kGridGroupSize) in;
 layout(constant_id = kSpecGridStage) const uint kStage = kGridStageCount;
 layout(constant_id = kSpecPhotonKernel) const uint kKernel = kKernelCone;
+layout(constant_id = kSpecPhotonGatherCount) const uint kGatherCount = 0u;  // query: k nearest (0: all within r)
 layout(push_constant) uniform Push { HashGridPush pc; };
 
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer PhotonMapRef { PhotonMapHeader h; };
@@ -157,7 +158,20 @@ void main() {
         // added up over the slices (one query per thread: the host dispatches enough threads).
         Vec4ArrayRef src = Vec4ArrayRef(uvec2(pc.srcLo, pc.srcHi));
         Vec4ArrayRef dst = Vec4ArrayRef(uvec2(pc.dstLo, pc.dstHi));
-        if (id < pc.count) {
+        if (id < pc.count && kGatherCount > 0u) {
+            // k nearest: per query (base.x, 0, found, 0) then the nearest photons so far
+            // (nearestStore), rewritten by every slice; the last slice's sums are the answer.
+            uint stride = 1u + (kGatherCount + 1u) / 2u;
+            NearestStateRef state = NearestStateRef(uvec2(pc.dstLo, pc.dstHi));
+            NearestPhotons nearest;
+            if (pc.sliceBegin == 0u) nearestClear(nearest, kGatherCount);
+            else nearestLoad(state, id * stride + 1u, nearest, kGatherCount);
+            nearestSearch(map, src.v[2u * id].xyz, pc.radius * pc.radius, kGatherCount, pc.sliceBegin, nearest);
+            nearestStore(state, id * stride + 1u, nearest, kGatherCount);
+            GatherSums s = nearestSums(map, nearest, src.v[2u * id + 1u].xyz, pc.radius * pc.radius, kGatherCount,
+                                       kKernel);
+            dst.v[id * stride] = vec4(s.base.x, 0.0, float(s.found), 0.0);
+        } else if (id < pc.count) {
             GatherSums s = gatherPhotons(map, src.v[2u * id].xyz, src.v[2u * id + 1u].xyz, pc.radius * pc.radius, true,
                                          pc.logRadius2, pc.logStep2, kKernel, pc.sliceBegin);
             vec4 sums = vec4(s.base.x, s.difference.x, float(s.found), 0.0);

@@ -81,9 +81,11 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
 // its radius is then the k-th distance r_k when it found k, else r_b, and the estimate is
 // sum_i f Phi_i W_{r}(|x - x_i|) over those photons (uniform kernel: 1 / (pi r^2) each; the
 // k-th photon sits on the kernel's edge and counts). The search keeps the k smallest squared
-// distances and their photons' sorted indices in a fixed array (slots k.. unused); a slot whose
-// distance is +inf is empty. A gather in several slices carries the array in memory between them
-// (nearestStore / nearestLoad: two slots a uvec4).
+// distances and their photons' sorted indices in a max-heap over slots 0 .. k-1 (slots k.. unused)
+// whose empty slots hold +inf (kInfinity): every photon nearer than the root replaces it and sifts
+// down, so filling and replacing are one operation of at most log2(k) steps. A gather in several
+// slices carries the heap in memory between them (nearestStore / nearestLoad: two slots a uvec4).
+// Slices read gatherSlicePhotons(k) photons of each bucket (lavapipe's loop budget: gpu_types.h).
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer NearestStateRef { uvec4 v[]; };
 
 struct NearestPhotons {
@@ -98,23 +100,29 @@ void nearestClear(inout NearestPhotons s, uint k) {
     }
 }
 
-// The slot holding the largest distance (the one a nearer photon replaces).
-uint nearestFarthest(NearestPhotons s, uint k) {
-    uint far = 0u;
-    for (uint j = 1u; j < k; ++j)
-        if (s.d2[j] > s.d2[far]) far = j;
-    return far;
+// Replaces the farthest photon kept (the heap's root) by one at squared distance d2.
+void nearestReplaceFarthest(inout NearestPhotons s, uint k, float d2, uint index) {
+    uint i = 0u;
+    for (uint level = 0u; level < 6u; ++level) {  // k <= 64: a path of at most 6 edges
+        uint c = 2u * i + 1u;
+        if (c >= k) break;
+        if (c + 1u < k && s.d2[c + 1u] > s.d2[c]) c += 1u;
+        if (!(s.d2[c] > d2)) break;
+        s.d2[i] = s.d2[c];
+        s.index[i] = s.index[c];
+        i = c;
+    }
+    s.d2[i] = d2;
+    s.index[i] = index;
 }
 
-// Photons sliceBegin .. sliceBegin + kGatherSlicePhotons - 1 of each bucket around x (the same
-// buckets and slices as gatherPhotons) offered to the k nearest kept in s.
+// Photons sliceBegin .. sliceBegin + gatherSlicePhotons(k) - 1 of each bucket around x (the
+// buckets of gatherPhotons) offered to the k nearest kept in s.
 void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint k, uint sliceBegin, inout NearestPhotons s) {
     float cellSize = map.h.cellSize;
     uint tableSize = map.h.tableSize;
     Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
     UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
-    uint far = nearestFarthest(s, k);
-    float farD2 = s.d2[far];
     ivec3 low = gridNeighbourhood(x, cellSize);
     uint visited[8];
     for (uint c = 0u; c < 8u; ++c) {
@@ -127,20 +135,16 @@ void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint k, uint sliceBegin,
         uint count = cellStart.v[h] - begin;
         if (sliceBegin >= count) continue;
         uint first = begin + sliceBegin;
-        uint last = first + min(count - sliceBegin, kGatherSlicePhotons);
+        uint last = first + min(count - sliceBegin, gatherSlicePhotons(k));
         for (uint i = first; i < last; ++i) {
             vec3 d = x - uintBitsToFloat(sortedTexel(sorted, 2u * i).xyz);
             float d2 = dot(d, d);
-            if (!(d2 < rb2) || !(d2 < farD2)) continue;
-            s.d2[far] = d2;
-            s.index[far] = i;
-            far = nearestFarthest(s, k);
-            farD2 = s.d2[far];
+            if (d2 < rb2 && d2 < s.d2[0]) nearestReplaceFarthest(s, k, d2, i);
         }
     }
 }
 
-// The estimate over the k nearest: kernel radius r_k^2 (the largest distance kept) when all k
+// The estimate over the k nearest: kernel radius r_k^2 (the root: the farthest kept) when all k
 // slots are full, else r_b^2; photons arriving from behind the surface add nothing but count
 // among the k, as in Tungsten.
 GatherSums nearestSums(PhotonMapRef map, NearestPhotons s, vec3 n, float rb2, uint k, uint kernel) {
@@ -149,8 +153,7 @@ GatherSums nearestSums(PhotonMapRef map, NearestPhotons s, vec3 n, float rb2, ui
     g.difference = vec3(0.0);
     g.found = 0u;
     Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
-    float r2 = s.d2[nearestFarthest(s, k)];
-    if (!(r2 < kInfinity)) r2 = rb2;
+    float r2 = s.d2[0] < kInfinity ? s.d2[0] : rb2;
     for (uint j = 0u; j < k; ++j) {
         if (!(s.d2[j] < kInfinity)) continue;
         uvec4 rest = sortedTexel(sorted, 2u * s.index[j] + 1u);

@@ -4,6 +4,7 @@
 // empty cells at small radii, two scan levels for a large table, one map built again and again.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -144,4 +145,96 @@ TEST_F(PhotonGrid, ReadingPhotonsByAddressMatchesBruteForce) {
     // than a texel buffer may be: sparse and crowded cells.
     for (float radius : {1e-2f, 0.3f}) compareWithBruteForce(20000, 10.0f, radius, kKernelCone, 256, 37, true);
     compareWithBruteForce(300000, 1.0f, 0.5f, kKernelEpanechnikov, 32, 41, true);
+}
+
+namespace {
+
+// Tungsten's k-nearest gather on the CPU: the k photons (any direction) nearest x within r_b,
+// kernel radius r_k^2 = the k-th squared distance when k were found, else r_b^2; photons from
+// behind the surface count among the k but add nothing. `kth` is the photon rank whose distance
+// sets the radius (k in the estimator; k + 1 is the positive control: one photon too far).
+struct Nearest {
+    double base = 0.0;
+    uint32_t found = 0;
+};
+Nearest bruteForceNearest(const std::vector<Photon>& photons, glm::vec3 x, glm::vec3 n, float radius, uint32_t k,
+                          uint32_t kernel, uint32_t kth) {
+    std::vector<std::pair<float, uint32_t>> within;
+    for (uint32_t i = 0; i < photons.size(); ++i) {
+        glm::vec3 d = x - photons[i].position;
+        float d2 = glm::dot(d, d);
+        if (d2 < radius * radius) within.push_back({d2, i});
+    }
+    std::partial_sort(within.begin(), within.begin() + std::min<size_t>(kth, within.size()), within.end());
+    Nearest s;
+    s.found = uint32_t(std::min<size_t>(k, within.size()));
+    const float r2 = within.size() >= kth ? within[kth - 1].first : radius * radius;
+    for (uint32_t j = 0; j < s.found; ++j) {
+        const Photon& p = photons[within[j].second];
+        if (glm::dot(decodeDirection(p.direction), n) <= 0.0f) continue;
+        s.base += double(p.power.x) * nearestKernelWeight(kernel, within[j].first, r2);
+    }
+    return s;
+}
+
+// Returns the queries whose device sums differ from the CPU's k-nearest sums with radius rank
+// kth by more than 1e-4 relative (photons at equal distance may swap ranks; random positions
+// make that rare: allowed in 1 query of 1000).
+uint32_t nearestMismatches(uint32_t photonCount, float size, float radius, uint32_t k, uint32_t kernel,
+                           uint32_t kth, uint32_t queryCount, uint32_t seed, bool byAddress = false,
+                           bool sparse = false) {
+    Rng rng = rngCreate(seed, 1, 2);
+    std::vector<Photon> photons(photonCount);
+    for (Photon& p : photons) {
+        p.position = (glm::vec3(rngNext(rng), rngNext(rng), rngNext(rng)) - 0.5f) * size;
+        p.power = glm::vec3(0.5f + rngNext(rng), 0.0f, 0.0f);
+        p.direction = encodeDirection(direction(rng));
+        p.pad0 = 0;
+    }
+    std::vector<glm::vec3> xs(queryCount), ns(queryCount);
+    for (uint32_t i = 0; i < queryCount; ++i) {
+        xs[i] = (glm::vec3(rngNext(rng), rngNext(rng), rngNext(rng)) - 0.5f) * size;
+        ns[i] = direction(rng);
+    }
+    PhotonMap map(sharedContext(), photonCount);
+    map.uploadPhotons(photons, 2.0f * radius);
+    std::vector<glm::vec4> got = map.queryNearest(xs, ns, radius, k, kernel, byAddress);
+    uint32_t bad = 0, full = 0;
+    for (uint32_t i = 0; i < queryCount; ++i) {
+        Nearest want = bruteForceNearest(photons, xs[i], ns[i], radius, k, kernel, kth);
+        full += want.found == k;
+        if (uint32_t(got[i].z) != want.found || std::abs(got[i].x - want.base) > 1e-4 * std::abs(want.base) + 1e-30)
+            ++bad;
+    }
+    if (sparse) EXPECT_LE(full, queryCount / 2) << "most queries should find fewer than k photons";
+    else EXPECT_GE(full, queryCount / 2) << "most queries should find k photons";
+    return bad;
+}
+
+}  // namespace
+
+TEST_F(PhotonGrid, NearestPhotonsMatchBruteForceAndTheWrongRadiusDoesNot) {
+    // Sparse (some queries find fewer than k within r_b, so r_b is the radius) and crowded cells
+    // (several gather slices carry the k nearest between dispatches), k from 1 to the maximum.
+    // 20000 photons in a cube of side 2: about 84 within 0.2 of a query, 5 within 0.08.
+    struct Case {
+        uint32_t photons;
+        float size, radius;
+        uint32_t k, kernel;
+        bool sparse;
+        uint32_t queries = 256;
+    };
+    for (Case c : {Case{20000, 2.0f, 0.2f, 20, kKernelUniform, false}, Case{20000, 2.0f, 0.08f, 20, kKernelUniform, true},
+                   Case{5000, 2.0f, 0.3f, 1, kKernelCone, false},
+                   Case{20000, 2.0f, 0.25f, kMaxGatherCount, kKernelEpanechnikov, false},
+                   Case{300000, 1.0f, 0.5f, 20, kKernelUniform, false, 32}}) {
+        const uint32_t queries = c.queries;
+        EXPECT_LE(nearestMismatches(c.photons, c.size, c.radius, c.k, c.kernel, c.k, queries, 61, false, c.sparse),
+                  queries / 1000)
+            << c.photons << " photons, r " << c.radius << ", k " << c.k;
+    }
+    // By address (the path for maps beyond the texel limit).
+    EXPECT_EQ(nearestMismatches(20000, 2.0f, 0.2f, 20, kKernelUniform, 20, 256, 67, true), 0u);
+    // Control: the radius set by the (k+1)-th photon, the same queries: most must differ.
+    EXPECT_GE(nearestMismatches(20000, 2.0f, 0.2f, 20, kKernelUniform, 21, 256, 61), 128u);
 }

@@ -284,6 +284,15 @@ CONST uint kGatherBlockVec4s = 6u;  // per-pixel block buffer of the gather (gat
 // k-nearest gathers keep the k nearest photons (squared distance, sorted index) of a pixel across
 // slices: after the block vec4s, kMaxGatherCount / 2 vec4 more per pixel.
 CONST uint kMaxGatherCount = 64u;
+// A k-nearest gather keeps the k nearest in a max-heap: each photon nearer than the farthest kept
+// sifts down at most log2(64) = 6 levels, an inner loop the SIMD group runs whenever one lane
+// needs it. Its slices read 512 photons of each bucket: at most 8 x 512 x (1 + 6) = 28672 loop
+// iterations, within lavapipe's 65535 with the camera chain's traversal.
+CONST uint kGatherSliceNearestPhotons = 512u;
+// Photons of each bucket one gather dispatch reads (gatherCount: the k of a k-nearest gather, or 0).
+FN uint gatherSlicePhotons(uint gatherCount) {
+    return gatherCount > 0u ? kGatherSliceNearestPhotons : kGatherSlicePhotons;
+}
 
 // A stored photon: where it landed, where it came from (octahedral, 2 x snorm16) and its power
 // (flux per emitted path of the pass).

@@ -35,11 +35,13 @@ PhotonMap::PhotonMap(gpu::Context& context, uint64_t capacity) : context_(contex
 // hash_grid_build's bindings (hash_grid_build.comp): 0 the sorted photons, 1 the photons as texels;
 // 2 the sorted photons, 3 the bucket counts, 4 the bucket starts as storage texels.
 // kSpecSortedTexels says whether the stages use them or reach the arrays by address.
-gpu::PipelineDesc PhotonMap::stageDesc(uint32_t stage, bool texels, uint32_t kernel) {
+gpu::PipelineDesc PhotonMap::stageDesc(uint32_t stage, bool texels, uint32_t kernel, uint32_t gatherCount) {
     using namespace shader;
     constexpr uint32_t kTexels = (1u << 0) | (1u << 1), kStorageTexels = (1u << 2) | (1u << 3) | (1u << 4);
     return {"hash_grid_build", 5, uint32_t(sizeof(HashGridPush)),
-            {{kSpecGridStage, stage}, {kSpecPhotonKernel, kernel}, {kSpecSortedTexels, texels}}, 0, kTexels, kStorageTexels};
+            {{kSpecGridStage, stage}, {kSpecPhotonKernel, kernel}, {kSpecSortedTexels, texels},
+             {kSpecPhotonGatherCount, gatherCount}},
+            0, kTexels, kStorageTexels};
 }
 
 void PhotonMap::bindStage(gpu::ComputePipeline& pipeline, bool texels) const {
@@ -130,8 +132,9 @@ uint32_t PhotonMap::maxBucket() const {
     return h.maxBucket;
 }
 
-uint32_t PhotonMap::slicesFor(uint32_t photonsInBucket) {
-    return std::max<uint32_t>(1, (photonsInBucket + shader::kGatherSlicePhotons - 1) / shader::kGatherSlicePhotons);
+uint32_t PhotonMap::slicesFor(uint32_t photonsInBucket, uint32_t gatherCount) {
+    const uint32_t slice = shader::gatherSlicePhotons(gatherCount);
+    return std::max<uint32_t>(1, (photonsInBucket + slice - 1) / slice);
 }
 
 shader::HashGridPush PhotonMap::basePush() const {
@@ -202,9 +205,32 @@ void PhotonMap::uploadPhotons(const std::vector<shader::Photon>& photons, float 
 std::vector<glm::vec4> PhotonMap::query(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& normals,
                                         float radius, float logRadius2, float logStep2, uint32_t kernel,
                                         bool byAddress) {
+    shader::HashGridPush p = basePush();
+    p.radius = radius;
+    p.logRadius2 = logRadius2;
+    p.logStep2 = logStep2;
+    return runQuery(positions, normals, p, kernel, 0, byAddress);
+}
+
+std::vector<glm::vec4> PhotonMap::queryNearest(const std::vector<glm::vec3>& positions,
+                                               const std::vector<glm::vec3>& normals, float radius, uint32_t k,
+                                               uint32_t kernel, bool byAddress) {
+    if (k == 0 || k > shader::kMaxGatherCount) throw std::invalid_argument("k nearest: k out of range");
+    shader::HashGridPush p = basePush();
+    p.radius = radius;
+    std::vector<glm::vec4> all = runQuery(positions, normals, p, kernel, k, byAddress);
+    const size_t stride = 1 + (k + 1) / 2;
+    std::vector<glm::vec4> out(positions.size());
+    for (size_t i = 0; i < out.size(); ++i) out[i] = all[i * stride];
+    return out;
+}
+
+std::vector<glm::vec4> PhotonMap::runQuery(const std::vector<glm::vec3>& positions,
+                                           const std::vector<glm::vec3>& normals, shader::HashGridPush p,
+                                           uint32_t kernel, uint32_t gatherCount, bool byAddress) {
     using namespace shader;
     const bool texels = texelsFit() && !byAddress;
-    const gpu::PipelineDesc d = stageDesc(kGridStageQuery, texels, kernel);
+    const gpu::PipelineDesc d = stageDesc(kGridStageQuery, texels, kernel, gatherCount);
     gpu::ComputePipeline pipeline(context_, d.shaderName, d.bufferCount, d.pushConstantBytes, d.spec, d.uniformBindings,
                                   d.texelBindings, d.storageTexelBindings);
     bindStage(pipeline, texels);
@@ -213,16 +239,13 @@ std::vector<glm::vec4> PhotonMap::query(const std::vector<glm::vec3>& positions,
         in[2 * i] = glm::vec4(positions[i], 0.0f);
         in[2 * i + 1] = glm::vec4(normals[i], 0.0f);
     }
+    const size_t stride = gatherCount > 0 ? 1 + (gatherCount + 1) / 2 : 1;
     gpu::Buffer queries(context_, in.size() * sizeof(glm::vec4), "photon queries");
-    gpu::Buffer results(context_, positions.size() * sizeof(glm::vec4), "photon query results");
+    gpu::Buffer results(context_, positions.size() * stride * sizeof(glm::vec4), "photon query results");
     queries.upload(in);
-    HashGridPush p = basePush();
     p.srcLo = lo(queries.address()), p.srcHi = hi(queries.address());
     p.dstLo = lo(results.address()), p.dstHi = hi(results.address());
     p.count = uint32_t(positions.size());
-    p.radius = radius;
-    p.logRadius2 = logRadius2;
-    p.logStep2 = logStep2;
     if (p.count > kMaxGroups * kGridGroupSize) throw std::invalid_argument("too many photon map queries");
     const uint32_t groups = std::max<uint32_t>(1, (p.count + kGridGroupSize - 1) / kGridGroupSize);
     {
@@ -233,11 +256,11 @@ std::vector<glm::vec4> PhotonMap::query(const std::vector<glm::vec3>& positions,
     }
     // As many slices as the fullest bucket needs (each dispatch reads kGatherSlicePhotons photons
     // of every bucket), one submit each.
-    const uint32_t slices = slicesFor(maxBucket());
+    const uint32_t slices = slicesFor(maxBucket(), gatherCount);
     for (uint32_t slice = 0; slice < slices; ++slice) {
         gpu::CommandBatch batch(context_, 1);
         batch.begin();
-        p.sliceBegin = slice * kGatherSlicePhotons;
+        p.sliceBegin = slice * gatherSlicePhotons(gatherCount);
         batch.dispatch(pipeline, &p, sizeof(p), groups, 1, 1, "query");
         batch.submitAndWait();
     }

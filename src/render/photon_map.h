@@ -49,7 +49,8 @@ public:
     // Photons in the fullest bucket of the last build (the scan records it).
     uint32_t maxBucket() const;
     // Gather slices (dispatches of kGatherSlicePhotons photons per bucket) for a bucket this full.
-    static uint32_t slicesFor(uint32_t photonsInBucket);
+    // (gatherCount: a k-nearest gather's k, whose slices are smaller; 0 for every photon within r.)
+    static uint32_t slicesFor(uint32_t photonsInBucket, uint32_t gatherCount = 0);
 
     // Records the hash-grid build over the stored photons: clear, count, scan, scatter.
     void recordBuild(gpu::CommandBatch& batch);
@@ -64,12 +65,18 @@ public:
     std::vector<glm::vec4> query(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& normals,
                                  float radius, float logRadius2, float logStep2, uint32_t kernel,
                                  bool byAddress = false);
+    // Tests: the k-nearest gather (nearestSearch / nearestSums) at each query within `radius`:
+    // (base, 0, found, 0) per query, base = sum over the k nearest of power.x W_{r_k}.
+    std::vector<glm::vec4> queryNearest(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& normals,
+                                        float radius, uint32_t k, uint32_t kernel, bool byAddress = false);
 
 private:
     void allocate(uint64_t capacity);
     void recordStage(gpu::CommandBatch& batch, uint32_t stage, const shader::HashGridPush& push, uint64_t threads);
     shader::HashGridPush basePush() const;
-    static gpu::PipelineDesc stageDesc(uint32_t stage, bool texels, uint32_t kernel = 0);
+    static gpu::PipelineDesc stageDesc(uint32_t stage, bool texels, uint32_t kernel = 0, uint32_t gatherCount = 0);
+    std::vector<glm::vec4> runQuery(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& normals,
+                                    shader::HashGridPush p, uint32_t kernel, uint32_t gatherCount, bool byAddress);
     void bindStage(gpu::ComputePipeline& pipeline, bool texels) const;
 
     gpu::Context& context_;

@@ -271,15 +271,15 @@ public:
         const uint64_t stored = map_.storedCount();
         const uint32_t fullest = map_.maxBucket();
         lastStored_ = stored;
-        const uint32_t slicesNeeded = PhotonMap::slicesFor(fullest);
+        const uint32_t slicesNeeded = PhotonMap::slicesFor(fullest, integrator_.photon.gatherCount);
         if (stored > map_.capacity() || slicesNeeded > slices_) {
             // The gather skipped its accumulation: grow what was short and repeat the pass.
             if (stored > map_.capacity()) map_.reserve(stored + stored / 4);
-            if (slicesNeeded > slices_) slices_ = PhotonMap::slicesFor(fullest + fullest / 4);
+            if (slicesNeeded > slices_) slices_ = PhotonMap::slicesFor(fullest + fullest / 4, integrator_.photon.gatherCount);
             return false;
         }
         map_.shrinkTo(stored + stored / 4);  // the next pass stores about as many
-        if (slicesNeeded * 2 < slices_) slices_ = PhotonMap::slicesFor(fullest + fullest / 4);
+        if (slicesNeeded * 2 < slices_) slices_ = PhotonMap::slicesFor(fullest + fullest / 4, integrator_.photon.gatherCount);
         if (blocks() && ++passInBlock_ == block_.passes) passInBlock_ = 0;
         return true;
     }
