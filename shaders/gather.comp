@@ -101,8 +101,9 @@ void main() {
         light += throughput * primEmission(pr, dir, ng);
         if (v > kPhotonMaxBounces) break;
         MaterialGpu m = sceneMaterial(pr.material);
-        bool front = dot(dir, ng) < 0.0;
-        vec3 n = front ? ng : -ng;  // faces the camera path
+        vec3 ns = shadingNormal(hit.prim, hit.bary, ng);  // ng unless the triangle is smooth-shaded
+        bool front = dot(dir, ns) < 0.0;
+        vec3 n = front ? ns : -ns;  // faces the camera path
 
         if (m.type == kBsdfLambert) {
             if (!front && !kTwoSided) break;

@@ -247,8 +247,9 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         s.vertex = v + 1u;
         return true;
     }
-    bool front = dot(s.dir, ng) < 0.0;
-    vec3 n = front ? ng : -ng;  // faces the incoming ray
+    vec3 ns = shadingNormal(hit.prim, hit.bary, ng);  // ng unless the triangle is smooth-shaded
+    bool front = dot(s.dir, ns) < 0.0;
+    vec3 n = front ? ns : -ns;  // faces the incoming ray
 #ifdef TELESCOPE_GLOSSY
     // Mixed, transparency and thin sheets, resolved here to one material or a straight pass:
     // - mixed: component 0 with probability ratio, else component 1, with the mixed albedo as
@@ -329,7 +330,7 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         // Local frame around the normal facing the viewer; a rough dielectric keeps the outward one.
         bool dielectric = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && m.type == kBsdfRoughDielectric;
         if (!front && !kTwoSided && !dielectric) return false;
-        vec3 nf = dielectric ? ng : n;
+        vec3 nf = dielectric ? ns : n;
         vec3 t, b;
         buildFrame(nf, t, b);
         vec3 wi = vec3(dot(-s.dir, t), dot(-s.dir, b), dot(-s.dir, nf));

@@ -98,8 +98,9 @@ void main() {
         vec3 p, ng;
         hitPoint(pr, origin, dir, hit.t, p, ng);
         MaterialGpu m = sceneMaterial(pr.material);
-        bool front = dot(dir, ng) < 0.0;
-        vec3 n = front ? ng : -ng;  // faces the incoming photon
+        vec3 ns = shadingNormal(hit.prim, hit.bary, ng);  // ng unless the triangle is smooth-shaded
+        bool front = dot(dir, ns) < 0.0;
+        vec3 n = front ? ns : -ns;  // faces the incoming photon
 
         // ---- Scatter: store at diffuse vertices, then continue ----
         vec3 scale;

@@ -4,6 +4,25 @@
 #include "shared/bsdf.h"
 #include "shared/emitter.h"
 
+// ---- Shading normals ----
+layout(constant_id = kSpecSmoothNormals) const bool kSmoothNormals = false;
+layout(std430, binding = kBindingShadingNormals) readonly buffer ShadingNormalBuffer { vec4 shadingNormals[]; };
+
+// The normal the BSDF sees at a hit of prim slot `prim` (bary: the weights of p1 and p2): a
+// smooth-shaded triangle's vertex normals interpolated and normalised (Tungsten's
+// TriangleMesh::normalAt), else the geometric normal ng. As in Tungsten, the side a ray arrives
+// from is then read off this normal (the BSDF's frame), while ray offsets, media and one-sided
+// emission keep ng.
+vec3 shadingNormal(uint prim, vec2 bary, vec3 ng) {
+    if (!kSmoothNormals) return ng;
+    vec4 a = shadingNormals[3u * prim];
+    if (a.w == 0.0) return ng;
+    vec3 n = (1.0 - bary.x - bary.y) * a.xyz + bary.x * shadingNormals[3u * prim + 1u].xyz +
+             bary.y * shadingNormals[3u * prim + 2u].xyz;
+    float l = length(n);
+    return l > 0.0 ? n / l : ng;
+}
+
 // Offset along the geometric normal, to the side the next ray leaves from.
 vec3 offsetRayOrigin(vec3 p, vec3 ng, vec3 dir) {
     float scale = max(max(abs(p.x), abs(p.y)), abs(p.z));

@@ -127,14 +127,17 @@ CONST uint kBindingEnvironment = 10u;
 CONST uint kBindingMaterialsUniform = 11u;
 CONST uint kBindingLightsUniform = 12u;
 CONST uint kBindingMediaUniform = 13u;
-CONST uint kPathTraceBindingCount = 14u;
+// Smooth-shaded triangles' vertex normals (scene_common.glsl shadingNormal): three vec4 per prim
+// slot, (n0, 1 if smooth), (n1, 0), (n2, 0); one dummy vec4 in scenes without smooth triangles.
+CONST uint kBindingShadingNormals = 14u;
+CONST uint kPathTraceBindingCount = 15u;
 CONST uint kUniformSceneBytes = 65536u;  // maxUniformBufferRange on lavapipe; the Vulkan minimum is 16384
 CONST uint kMaxUniformNodes = 2048u;     // kUniformSceneBytes / sizeof(BvhNode)
 CONST uint kMaxUniformPrims = 1024u;     // kUniformSceneBytes / sizeof(Prim)
 CONST uint kMaxUniformMaterials = 682u;  // kUniformSceneBytes / sizeof(MaterialGpu), rounded down
 CONST uint kMaxUniformLights = 1365u;    // ... / sizeof(LightGpu)
 CONST uint kMaxUniformMedia = 273u;      // ... / sizeof(MediumGpu)
-CONST uint kSceneBindingCount = 9u;      // photon_trace and gather: the scene only (bindings 4-6, media, unused)
+CONST uint kSceneBindingCount = 15u;     // photon_trace and gather: the scene only (4-6 and 9-13 unused; the gather's texels at 9)
 
 // Specialisation constant ids: features a scene lacks are folded away by the compiler.
 CONST uint kSpecMaxBounces = 0u;
@@ -162,6 +165,7 @@ CONST uint kSpecSceneInUniforms = 19u;   // BVH nodes and primitives read from t
 CONST uint kSpecBsdfFamilies = 21u;     // kFamily* bits: the non-delta material families present
 CONST uint kSpecHasTextures = 22u;      // some material has a texture (uvs are computed at its hits)
 CONST uint kSpecEnvironmentMap = 23u;    // the environment light (kSpecEnvironmentLight) has an image
+CONST uint kSpecSmoothNormals = 25u;     // some triangle is smooth-shaded: read kBindingShadingNormals
 CONST uint kSpecTablesInUniforms = 24u;  // materials, lights and media read from the uniform bindings
 
 // Participating media, ids 32..47 (shaders/medium.glsl).
@@ -269,7 +273,7 @@ CONST uint kGridStageQuery = 4u;    // kernel sums at query points (tests)
 // The gather's bindings: the scene's (kSceneBindingCount), then the sorted photons as a uniform
 // texel buffer (photon_gather.glsl).
 CONST uint kBindingSortedTexels = 9u;
-CONST uint kGatherBindingCount = 10u;
+CONST uint kGatherBindingCount = 15u;
 
 CONST uint kPhotonTraceGroupSize = 64u;
 CONST uint kGridGroupSize = 256u;

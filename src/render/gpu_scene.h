@@ -31,6 +31,7 @@ struct SceneFeatures {
     bool tablesFitUniforms = false;  // materials, lights and media fit them too (kSpecTablesInUniforms)
     uint32_t primCount = 0;        // primitive slots (a mesh's triangles count one each)
     uint32_t bruteForcePrims = 0;  // > 0: so few prims (in uniforms) that rays test them all, no BVH
+    bool smoothNormals = false;  // some mesh triangle is smooth-shaded (kSpecSmoothNormals)
     bool textures = false;      // some material has a textured parameter
     uint32_t textureCount = 0;
 };
@@ -52,6 +53,7 @@ struct GpuScene {
     std::vector<uint32_t> primMedia;         // per prim slot (shader::kPrimMediaNone or packed)
     std::vector<glm::vec4> textureData;      // shared/texture.h's layout (one dummy vec4 without textures)
     std::vector<float> environment;          // the environment image and its tables (one float without)
+    std::vector<glm::vec4> shadingNormals;   // 3 per prim slot with smooth triangles, else one dummy
     SceneFeatures features;
 };
 

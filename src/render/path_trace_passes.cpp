@@ -159,6 +159,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecTablesInUniforms, f.tablesFitUniforms},
         {kSpecBsdfFamilies, f.bsdfFamilies},
         {kSpecHasTextures, f.textures},
+        {kSpecSmoothNormals, f.smoothNormals},
         {kSpecEnvironmentMap, f.environmentMap},
         {kSpecHasMedia, f.media},
         {kSpecTrEstimator, uint32_t(in.transmittance.type)},
@@ -183,7 +184,7 @@ public:
         : pipeline_(context, plan.pathTraceShader, shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
                     deviceSceneSpec(context, plan.pathTraceSpec), kPathTraceUniformBindings) {
         pipeline_.bindBuffers({b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims,
-                               b.textures, b.environment, b.materials, b.lights, b.media});
+                               b.textures, b.environment, b.materials, b.lights, b.media, b.shadingNormals});
         const Camera& cam = scene.camera;
         setPushCamera(push_, cam);
         push_.width = cam.width;

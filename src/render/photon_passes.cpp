@@ -163,6 +163,7 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         {kSpecPhotonMaxBounces, in.maxBounces},
         {kSpecSceneInUniforms, f.fitsUniforms},
         {kSpecBruteForcePrims, f.bruteForcePrims},
+        {kSpecSmoothNormals, f.smoothNormals},
     };
 }
 
@@ -188,8 +189,10 @@ public:
                            (shader::kGatherBlockVec4s + (scene.integrator.photon.gatherCount + 1) / 2) * 16,
                        "gather blocks") {
         blockBuffer_.fill(0);
-        // Bindings 4-6 (media in the path tracer) are declared by neither shader: any buffer will do.
-        scene_ = {b.prims, b.nodes, b.materials, b.lights, b.lights, b.lights, b.lights, b.nodes, b.prims};
+        // Bindings 4-6 and 9-13 (media, textures and uniform tables in the path tracer) are declared
+        // by neither shader: any buffer will do (the gather binds its texels at 9).
+        scene_ = {b.prims,  b.nodes,  b.materials, b.lights, b.lights, b.lights, b.lights,        b.nodes,
+                  b.prims,  b.lights, b.lights,    b.lights, b.lights, b.lights, b.shadingNormals};
         trace_.bindBuffers(scene_);
         gatherTexels_ = map_.texelsFit();  // as the gather pipeline was created
         bindGather();
@@ -325,7 +328,7 @@ private:
             gatherTexels_ = texels;
         }
         std::vector<const gpu::Buffer*> bound = scene_;
-        bound.push_back(&map_.gatherTexels());
+        bound[shader::kBindingSortedTexels] = &map_.gatherTexels();
         pipelines_[1]->bindBuffers(bound);
         gatherBinds_ = map_.generation();
     }

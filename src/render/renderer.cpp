@@ -43,6 +43,7 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uin
     primMedia_ = makeBuffer(gpuScene_.primMedia, "prim media");
     textures_ = makeBuffer(gpuScene_.textureData, "textures");  // a dummy without textures
     environment_ = makeBuffer(gpuScene_.environment, "environment");
+    shadingNormals_ = makeBuffer(gpuScene_.shadingNormals, "shading normals");  // a dummy without smooth meshes
 
     // ---- Accumulation: (hi, lo) vec4 pairs per channel and pixel ----
     const uint64_t pixels = uint64_t(scene.camera.width) * scene.camera.height;
@@ -56,7 +57,7 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uin
     stats_.uploadSeconds = secondsSince(phase);
     phase = Clock::now();
     const RenderBuffers buffers{&prims_,    &nodes_,     &materials_, &lights_,   &accum_,      &media_,
-                                &gridData_, &primMedia_, &textures_,  &environment_};
+                                &gridData_, &primMedia_, &textures_,  &environment_, &shadingNormals_};
     passes_ = usesPhotons(scene.integrator) ? makePhotonPasses(context, scene, plan_, buffers, seed)
                                             : makePathTracePasses(context, scene, plan_, buffers, seed);
     batch_ = std::make_unique<gpu::CommandBatch>(context, kMaxDispatchesPerBatch);

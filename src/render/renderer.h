@@ -114,6 +114,7 @@ private:
     gpu::Buffer prims_, nodes_, materials_, lights_, accum_;
     gpu::Buffer media_, gridData_, primMedia_;  // participating media (path tracer only)
     gpu::Buffer textures_;                       // textures and uv records (path tracer only)
+    gpu::Buffer shadingNormals_;                 // smooth triangles' vertex normals
     gpu::Buffer environment_;                   // environment image (path tracer only)
     std::unique_ptr<SamplePasses> passes_;  // the integrator's passes
     std::unique_ptr<gpu::CommandBatch> batch_;

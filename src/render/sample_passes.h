@@ -77,6 +77,7 @@ struct RenderBuffers {
     const gpu::Buffer* primMedia = nullptr;
     const gpu::Buffer* textures = nullptr;  // binding 9 of path_trace (shared/texture.h)
     const gpu::Buffer* environment = nullptr;  // binding kBindingEnvironment of path_trace
+    const gpu::Buffer* shadingNormals = nullptr;  // binding kBindingShadingNormals of every scene pass
 };
 
 class SamplePasses {

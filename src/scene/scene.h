@@ -101,6 +101,10 @@ struct Geometry {
     // (a primitive without int_medium / ext_medium leaves the current medium unchanged).
     bool hasMedia = false;
     int32_t intMedium = -1, extMedium = -1;
+    // A smooth-shaded mesh triangle (Tungsten's "smooth"): unit world-space normals at p0, p1, p2,
+    // interpolated at a hit for the shading normal; the geometric normal stays `normal`.
+    bool smooth = false;
+    glm::vec3 vertexNormal[3] = {glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f)};
 };
 
 // ---- Participating media (docs/MEDIA.md) ----

@@ -189,20 +189,42 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
             shapeGeometry.push_back(g);
         }
     } else {
-        // Mesh: vertices by M, geometric normal cross(p1 - p0, p2 - p0), flat shading
+        // Mesh: vertices by M, geometric normal cross(p1 - p0, p2 - p0). Tungsten's keys: "smooth"
+        // (default false) shades with the vertex normals interpolated, the file's own or, with
+        // "recompute_normals" (default false; Tungsten recomputes only for smooth meshes), its
+        // smoothVertexNormals, each taken to world space by the inverse transpose of M;
+        // "backface_culling" false is what Tungsten 0.2.2 renders for either value (its culling
+        // is not implemented), so true is refused rather than silently ignored.
         const std::string fileKey = member(key, "file");
         const json* fileValue = find(v, "file");
         if (!fileValue) fail(key, "missing 'file'");
+        const bool smooth = find(v, "smooth") && boolean(v["smooth"], member(key, "smooth"));
+        const bool recompute = find(v, "recompute_normals") && boolean(v["recompute_normals"], member(key, "recompute_normals"));
+        if (find(v, "backface_culling") && boolean(v["backface_culling"], member(key, "backface_culling")))
+            fail(member(key, "backface_culling"),
+                 "backface_culling true is not supported (Tungsten 0.2.2 does not cull either: its meshes render "
+                 "both faces); remove the key or set it to false");
         const fs::path relative = string(*fileValue, fileKey);
         const MeshData mesh = loadMesh((relative.is_absolute() ? relative : baseDir_ / relative).string(), file_, fileKey);
         std::vector<glm::vec3> world(mesh.positions.size());
         for (size_t i = 0; i < world.size(); ++i) world[i] = transformPoint(m, mesh.positions[i]);
+        std::vector<std::array<glm::vec3, 3>> shading;
+        if (smooth) shading = recompute ? smoothVertexNormals(mesh) : mesh.normals;
+        const glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(m)));
         for (size_t i = 0; i < mesh.triangles.size(); ++i) {
             const auto& t = mesh.triangles[i];
             const glm::vec3 n = glm::cross(world[t[1]] - world[t[0]], world[t[2]] - world[t[0]]);
             if (isDegenerate(n)) continue;
             area += 0.5 * glm::length(n);
             Geometry g = triangle(world[t[0]], world[t[1]], world[t[2]], glm::normalize(n));
+            if (smooth) {
+                // A corner without a usable normal (a file without any) takes the face's.
+                g.smooth = true;
+                for (int k = 0; k < 3; ++k) {
+                    const glm::vec3 w = normalMatrix * shading[i][k];
+                    g.vertexNormal[k] = isDegenerate(w) || !std::isfinite(w.x + w.y + w.z) ? g.normal : glm::normalize(w);
+                }
+            }
             for (int k = 0; k < 3; ++k) g.uv[k] = mesh.uvs[i][k];
             g.material = materials[std::clamp<int32_t>(mesh.materials[i], 0, int32_t(materials.size()) - 1)];
             shapeGeometry.push_back(g);
@@ -223,7 +245,10 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
         g.extMedium = extIndex;
         scene_.geometry.push_back(g);
     }
-    ignoreUnread(v, key, {"name", "type", "transform", "bsdf", "emission", "power", "file", "int_medium", "ext_medium"});
+    std::vector<std::string_view> read = {"name", "type", "transform", "bsdf", "emission", "power", "file", "int_medium",
+                                          "ext_medium"};
+    if (type == "mesh") read.insert(read.end(), {"smooth", "recompute_normals", "backface_culling"});
+    ignoreUnread(v, key, read);
 }
 
 // An infinite_sphere whose emission (or power) is an image: a file name relative to the scene file,
