@@ -92,14 +92,16 @@ void main() {
     vec3 throughput = vec3(1.0);
     vec3 light = vec3(0.0);  // emission along the chain and the light sample
     vec3 kernelBase = vec3(0.0), kernelDifference = vec3(0.0);  // times the BSDF, this slice
-    for (uint v = 1u; v <= kPhotonMaxBounces + 1u; ++v) {
+    // The camera chain's vertex v: emission seen there has v - 1 scattering vertices, a gather or
+    // light sample at v joins paths of at least v (photon_trace.comp: at most max_bounces - 1).
+    for (uint v = 1u; v <= kPhotonMaxBounces; ++v) {
         Hit hit;
         if (!traceClosest(origin, dir, kInfinity, hit)) break;
         Prim pr = scenePrim(hit.prim);
         vec3 p, ng;
         hitPoint(pr, origin, dir, hit.t, p, ng);
         light += throughput * primEmission(pr, dir, ng);
-        if (v > kPhotonMaxBounces) break;
+        if (v + 1u > kPhotonMaxBounces) break;
         MaterialGpu m = sceneMaterial(pr.material);
         vec3 ns = shadingNormal(hit.prim, hit.bary, ng);  // ng unless the triangle is smooth-shaded
         bool front = dot(dir, ns) < 0.0;
@@ -120,14 +122,14 @@ void main() {
                 else nearestLoad(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
                 nearestSearch(map, p, rb2, kGatherCount, pc.slice * gatherSlicePhotons(kGatherCount), nearest);
                 if (lastSlice) {
-                    sums = nearestSums(map, nearest, n, rb2, kGatherCount, kKernel);
+                    sums = nearestSums(map, nearest, n, rb2, kGatherCount, kKernel, kPhotonMaxBounces - v);
                 } else {
                     nearestStore(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
                     sums = GatherSums(vec3(0.0), vec3(0.0), 0u);
                 }
             } else {
                 sums = gatherPhotons(map, p, n, rb2, unbiased, logRadius2, pc.logAreaRatio, kKernel,
-                                     pc.slice * kGatherSlicePhotons);
+                                     pc.slice * kGatherSlicePhotons, kPhotonMaxBounces - v);
             }
             kernelBase = f * sums.base;
             kernelDifference = f * sums.difference;

@@ -169,11 +169,11 @@ void main() {
             nearestSearch(map, src.v[2u * id].xyz, pc.radius * pc.radius, kGatherCount, pc.sliceBegin, nearest);
             nearestStore(state, id * stride + 1u, nearest, kGatherCount);
             GatherSums s = nearestSums(map, nearest, src.v[2u * id + 1u].xyz, pc.radius * pc.radius, kGatherCount,
-                                       kKernel);
+                                       kKernel, 0xffffffffu);
             dst.v[id * stride] = vec4(s.base.x, 0.0, float(s.found), 0.0);
         } else if (id < pc.count) {
             GatherSums s = gatherPhotons(map, src.v[2u * id].xyz, src.v[2u * id + 1u].xyz, pc.radius * pc.radius, true,
-                                         pc.logRadius2, pc.logStep2, kKernel, pc.sliceBegin);
+                                         pc.logRadius2, pc.logStep2, kKernel, pc.sliceBegin, 0xffffffffu);
             vec4 sums = vec4(s.base.x, s.difference.x, float(s.found), 0.0);
             dst.v[id] = pc.sliceBegin == 0u ? sums : dst.v[id] + sums;
         }

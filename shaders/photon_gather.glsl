@@ -30,9 +30,10 @@ struct GatherSums {
 };
 
 // rb2 = r_b^2; logRadius2 = ln(r^2 / r_b^2), logStep2 = ln(r'^2 / r^2); no difference when
-// difference is false.
+// difference is false. Photons stored at a light-path vertex beyond maxVertex are left out (the
+// full path would have more scattering vertices than max_bounces allows: photon_trace.comp).
 GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool difference, float logRadius2,
-                         float logStep2, uint kernel, uint sliceBegin) {
+                         float logStep2, uint kernel, uint sliceBegin, uint maxVertex) {
     GatherSums s;
     s.base = vec3(0.0);
     s.difference = vec3(0.0);
@@ -62,9 +63,10 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
         for (uint i = first; i < last; ++i) {
             // The position first: most photons of the cells lie beyond r_b, and the rest of the
             // photon is read only for those within (measured 7% faster than reading it whole).
-            vec3 d = x - uintBitsToFloat(sortedTexel(sorted, 2u * i).xyz);
+            uvec4 position = sortedTexel(sorted, 2u * i);
+            vec3 d = x - uintBitsToFloat(position.xyz);
             float d2 = dot(d, d);
-            if (!(d2 < rb2)) continue;
+            if (!(d2 < rb2) || position.w > maxVertex) continue;
             uvec4 rest = sortedTexel(sorted, 2u * i + 1u);  // power, direction
             if (dot(decodeDirection(rest.w), n) <= 0.0) continue;
             vec3 power = uintBitsToFloat(rest.xyz);
@@ -145,9 +147,9 @@ void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint k, uint sliceBegin,
 }
 
 // The estimate over the k nearest: kernel radius r_k^2 (the root: the farthest kept) when all k
-// slots are full, else r_b^2; photons arriving from behind the surface add nothing but count
-// among the k, as in Tungsten.
-GatherSums nearestSums(PhotonMapRef map, NearestPhotons s, vec3 n, float rb2, uint k, uint kernel) {
+// slots are full, else r_b^2; photons arriving from behind the surface, or stored beyond
+// maxVertex, add nothing but count among the k, as in Tungsten.
+GatherSums nearestSums(PhotonMapRef map, NearestPhotons s, vec3 n, float rb2, uint k, uint kernel, uint maxVertex) {
     GatherSums g;
     g.base = vec3(0.0);
     g.difference = vec3(0.0);
@@ -158,7 +160,7 @@ GatherSums nearestSums(PhotonMapRef map, NearestPhotons s, vec3 n, float rb2, ui
         if (!(s.d2[j] < kInfinity)) continue;
         uvec4 rest = sortedTexel(sorted, 2u * s.index[j] + 1u);
         g.found += 1u;
-        if (dot(decodeDirection(rest.w), n) <= 0.0) continue;
+        if (dot(decodeDirection(rest.w), n) <= 0.0 || sortedTexel(sorted, 2u * s.index[j]).w > maxVertex) continue;
         g.base += uintBitsToFloat(rest.xyz) * nearestKernelWeight(kernel, s.d2[j], r2);
     }
     return g;

@@ -2,8 +2,10 @@
 // photon leaves it with power Phi / (p(light) N), follows mirror and dielectric bounces, and is
 // stored at every diffuse hit (from the second vertex on when direct light comes from next-event
 // estimation), then continues by cosine sampling with Russian roulette on its throughput.
-// Photons reaching vertex v carry light with v bounces at the gather; vertices beyond
-// max_bounces are not stored.
+// A photon keeps its vertex index v (1: the first surface the light reaches, specular ones counted).
+// With Tungsten's max_bounces M a full path joins a photon at v to a camera chain of c vertices
+// (the gather vertex counted in both) and has v + c - 1 scattering vertices, at most M - 1 (the
+// path tracer's depth k = M - 1); c >= 1, so vertices beyond M - 1 are not traced.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
@@ -70,13 +72,13 @@ void emitPhoton(uint path, inout Rng rng, out vec3 origin, out vec3 dir, out vec
 // The lanes of a subgroup that store at this vertex take consecutive slots reserved by ONE atomic on
 // the shared counter, not one atomic per photon: on lavapipe the counter's cache line moves between
 // the cores at every atomic; the stores were a third to a half of this pass (docs/BENCHMARKS.photon-notes.md).
-void storePhoton(PhotonMapRef map, PhotonArrayRef photons, uint capacity, vec3 p, vec3 wi, vec3 power) {
+void storePhoton(PhotonMapRef map, PhotonArrayRef photons, uint capacity, vec3 p, vec3 wi, vec3 power, uint vertex) {
     uvec4 lanes = subgroupBallot(true);
     uint first = 0u;
     if (subgroupElect()) first = atomicAdd(map.h.storedCount, subgroupBallotBitCount(lanes));
     uint slot = subgroupBroadcastFirst(first) + subgroupBallotExclusiveBitCount(lanes);
     if (slot >= capacity) return;  // counted: the host grows the buffer and repeats the pass
-    photons.p[slot] = Photon(p, 0u, power, encodeDirection(wi));
+    photons.p[slot] = Photon(p, vertex, power, encodeDirection(wi));
 }
 
 void main() {
@@ -91,7 +93,7 @@ void main() {
 
     vec3 origin, dir, power;
     emitPhoton(path, rng, origin, dir, power);
-    for (uint v = 1u; v <= kPhotonMaxBounces; ++v) {
+    for (uint v = 1u; v + 1u <= kPhotonMaxBounces; ++v) {
         Hit hit;
         if (!traceClosest(origin, dir, kInfinity, hit)) return;
         Prim pr = scenePrim(hit.prim);
@@ -106,7 +108,7 @@ void main() {
         vec3 scale;
         if (m.type == kBsdfLambert) {
             if (!front && !kTwoSided) return;
-            if (!kNextEvent || v > 1u) storePhoton(map, photons, capacity, p, -dir, power);
+            if (!kNextEvent || v > 1u) storePhoton(map, photons, capacity, p, -dir, power, v);
             dir = sampleCosineHemisphere(n, rngNext(rng), rngNext(rng));
             if (dot(dir, n) <= 0.0) return;
             scale = m.albedo;

@@ -63,7 +63,7 @@ void compareWithBruteForce(uint32_t photonCount, float size, float radius, uint3
         p.position = (glm::vec3(rngNext(rng), rngNext(rng), rngNext(rng)) - 0.5f) * size;
         p.power = glm::vec3(0.5f + rngNext(rng), 0.0f, 0.0f);
         p.direction = encodeDirection(direction(rng));
-        p.pad0 = 0;
+        p.vertex = 1;
     }
     std::vector<glm::vec3> xs(queryCount), ns(queryCount);
     for (uint32_t i = 0; i < queryCount; ++i) {
@@ -189,7 +189,7 @@ uint32_t nearestMismatches(uint32_t photonCount, float size, float radius, uint3
         p.position = (glm::vec3(rngNext(rng), rngNext(rng), rngNext(rng)) - 0.5f) * size;
         p.power = glm::vec3(0.5f + rngNext(rng), 0.0f, 0.0f);
         p.direction = encodeDirection(direction(rng));
-        p.pad0 = 0;
+        p.vertex = 1;
     }
     std::vector<glm::vec3> xs(queryCount), ns(queryCount);
     for (uint32_t i = 0; i < queryCount; ++i) {

@@ -110,7 +110,7 @@ protected:
 TEST_F(PhotonRefraction, UnbiasedBlocksThroughWaterMatchThePathTracerAndTheOldScalingFails) {
     const std::vector<RegionMean> reference = pathTracedRegions();
     const std::string unbiased = R"({"type": "photon_map", "photon_count": 20000, "gather_radius": 0.2,
-        "max_bounces": 63, "debias": {"estimator": "single_term", "level_schedule": "uniform"})";
+        "max_bounces": 64, "debias": {"estimator": "single_term", "level_schedule": "uniform"})";
     const Verdict right = compare(batchMeans(pool(unbiased + "}"), 32, 4, 5), reference, "scaled");
     EXPECT_EQ(right.tFailures, 0u);
     // The control: the same photons, pixels and levels (same seed) without the camera side's 1/eta^2.
@@ -124,7 +124,7 @@ TEST_F(PhotonRefraction, ProgressivePhotonMappingThroughWaterAgreesWithThePathTr
     // smooth, so its bias after 32 passes is far below the 2% this allows; the control is 77% high.
     const std::vector<RegionMean> reference = pathTracedRegions();
     const std::string ppm = R"({"type": "progressive_photon_map", "photon_count": 50000, "gather_radius": 0.1,
-        "max_bounces": 63)";
+        "max_bounces": 64)";
     const RegionMean right = imageMean(renderFilm(pool(ppm + "}"), 32, 3));
     const RegionMean old = imageMean(renderFilm(pool(ppm + R"(, "test_radiance_scaling": false})"), 32, 3));
     double want = 0.0;

@@ -301,7 +301,7 @@ FN uint gatherSlicePhotons(uint gatherCount) {
 // A stored photon: where it landed, where it came from (octahedral, 2 x snorm16) and its power
 // (flux per emitted path of the pass).
 struct Photon {
-    vec3 position; uint pad0;
+    vec3 position; uint vertex;  // vertex: the light path's vertex index v >= 1 where it was stored
     vec3 power; uint direction;
 };
 

@@ -153,7 +153,7 @@ void SceneReader::readPhotonSettings(const json& v, const std::string& key) {
 
     if (const json* n = find(v, "min_bounces"); n && integer(*n, "integrator.min_bounces", 0, kMaxBounces) != 0)
         fail("integrator.min_bounces", "photon mapping supports only min_bounces = 0");
-    if (const json* n = find(v, "max_bounces")) s.maxBounces = integer(*n, "integrator.max_bounces", 0, kMaxBounces);
+    if (const json* n = find(v, "max_bounces")) s.maxBounces = integer(*n, "integrator.max_bounces", 1, kMaxBounces);
     if (const json* b = find(v, "enable_two_sided_shading"))
         s.enableTwoSidedShading = boolean(*b, "integrator.enable_two_sided_shading");
     if (const json* n = find(v, "photon_count"))
