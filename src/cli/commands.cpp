@@ -46,8 +46,10 @@ Scene loadWithOverrides(const CommonOptions& o) {
 
 void reportIgnoredKeys(const Scene& scene, bool quiet) {
     if (quiet) return;
-    for (const auto& key : scene.ignoredKeys)
-        fmt::print(stderr, "{}: ignoring '{}' (not used by Telescope)\n", scene.path, key);
+    for (const auto& key : scene.ignoredKeys) {
+        const std::string why = ignoredKeyReason(key);
+        fmt::print(stderr, "{}: ignoring '{}' ({})\n", scene.path, key, why.empty() ? "not used by Telescope" : why);
+    }
 }
 
 gpu::ContextOptions contextOptions(const CommonOptions& o) {

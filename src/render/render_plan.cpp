@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "render/sample_passes.h"
+#include "scene/scene_loader.h"
 #include "shared/gpu_types.h"
 
 namespace telescope {
@@ -65,7 +66,10 @@ std::string describePlan(const Scene& scene, const RenderPlan& plan) {
     for (const auto& f : plan.features) s += fmt::format("  {:<16} {:<4} {}\n", f.name, f.on ? "on" : "off", f.why);
     if (!scene.ignoredKeys.empty()) {
         s += "ignored scene keys:\n";
-        for (const auto& k : scene.ignoredKeys) s += "  " + k + "\n";
+        for (const auto& k : scene.ignoredKeys) {
+            const std::string why = ignoredKeyReason(k);
+            s += fmt::format("  {:<36} {}\n", k, why.empty() ? "unknown to Telescope" : why);
+        }
     }
     return s;
 }

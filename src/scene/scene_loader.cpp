@@ -65,4 +65,27 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
     return loadSceneFromString(text.str(), path, fs::path(path).parent_path().string(), overrides);
 }
 
+std::string ignoredKeyReason(const std::string& key) {
+    static const std::pair<const char*, const char*> kReasons[] = {
+        {"renderer.output_file", "an output name: Telescope writes where -o says"},
+        {"renderer.hdr_output_file", "an output name: Telescope writes where -o says"},
+        {"renderer.resume_render_file", "an output name (resume files are --checkpoint's)"},
+        {"renderer.output_directory", "an output name: Telescope writes where -o says"},
+        {"renderer.overwrite_output_files", "output handling: Telescope writes a temporary file and renames it"},
+        {"renderer.output_buffers", "Tungsten's extra feature images: the EXR holds Telescope's channels"},
+        {"renderer.scene_bvh", "an acceleration choice: no pixel depends on it"},
+        {"renderer.spp_step", "Tungsten's progressive display step: the image at a given spp does not depend on it"},
+        {"camera.tonemap", "the display tone map: the EXR is linear (the PNG preview is clipped sRGB)"},
+        {"integrator.volume_photon_count", "volume photons: photon mapping scenes have no media (refused)"},
+        {"integrator.volume_gather_radius", "volume photons: photon mapping scenes have no media (refused)"},
+        {"integrator.fixed_volume_radius", "volume photons: photon mapping scenes have no media (refused)"},
+        {"renderer.adaptive_sampling",
+         "NOT HONOURED: Tungsten's adaptive sampling spends more samples on noisy pixels (the mean stays, the "
+         "noise changes); Telescope samples every pixel equally"},
+    };
+    for (const auto& [name, why] : kReasons)
+        if (key == name) return why;
+    return {};
+}
+
 }  // namespace telescope

@@ -17,4 +17,10 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
 Scene loadSceneFromString(const std::string& text, const std::string& displayName,
                           const std::string& baseDir, const std::vector<SceneOverride>& overrides = {});
 
+// Why an ignored key (Scene::ignoredKeys) is safe to ignore: for Tungsten's output, scheduling
+// and display keys, the reason it cannot change the EXR; for a key known to change the image that
+// Telescope does not honour yet, a sentence starting "NOT HONOURED"; empty for keys Telescope does
+// not know (misspellings, other renderers' keys).
+std::string ignoredKeyReason(const std::string& key);
+
 }  // namespace telescope

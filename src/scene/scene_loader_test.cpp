@@ -132,7 +132,13 @@ TEST(SceneLoader, CornellBoxIgnoredKeysAreListedOnce) {
     const Scene s = cornellBox();
     EXPECT_TRUE(hasIgnored(s, "camera.tonemap"));
     EXPECT_TRUE(hasIgnored(s, "renderer.output_file"));
-    EXPECT_TRUE(hasIgnored(s, "integrator.enable_volume_light_sampling"));
+    // Honoured (the one value Telescope renders), not ignored:
+    for (const char* key : {"integrator.enable_volume_light_sampling", "integrator.enable_consistency_checks",
+                            "renderer.stratified_sampler", "renderer.enable_resume_render", "renderer.timeout",
+                            "renderer.checkpoint_interval"})
+        EXPECT_FALSE(hasIgnored(s, key)) << key;
+    // Every key left ignored says why it cannot change the EXR.
+    for (const std::string& key : s.ignoredKeys) EXPECT_FALSE(ignoredKeyReason(key).empty()) << key;
     EXPECT_FALSE(hasIgnored(s, "renderer.spp"));
     EXPECT_EQ(std::set<std::string>(s.ignoredKeys.begin(), s.ignoredKeys.end()).size(), s.ignoredKeys.size());
 }
@@ -761,6 +767,12 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"UnsupportedTextureType", R"({"bsdfs": [{"type": "lambert", "albedo": {"type": "ies"}}]})", "", "bsdfs[0].albedo.type", "unsupported texture type 'ies'"},
         BadInput{"CheckerZeroResU", R"({"bsdfs": [{"type": "lambert", "albedo": {"type": "checker", "res_u": 0}}]})", "", "bsdfs[0].albedo.res_u", "expected an integer"},
         BadInput{"CheckerNegativeColour", R"({"bsdfs": [{"type": "lambert", "albedo": {"type": "checker", "off_color": -1}}]})", "", "bsdfs[0].albedo.off_color", "non-negative"},
+        BadInput{"StratifiedSampler", R"({"renderer": {"stratified_sampler": true}})", "", "renderer.stratified_sampler", "true is not supported"},
+        BadInput{"ResumeRender", R"({"renderer": {"enable_resume_render": true}})", "", "renderer.enable_resume_render", "--resume"},
+        BadInput{"RendererTimeout", R"({"renderer": {"timeout": "1h"}})", "", "renderer.timeout", "--time"},
+        BadInput{"CheckpointInterval", R"({"renderer": {"checkpoint_interval": 60}})", "", "renderer.checkpoint_interval", "--checkpoint-every"},
+        BadInput{"ConsistencyChecks", R"({"integrator": {"enable_consistency_checks": true}})", "", "integrator.enable_consistency_checks", "true is not supported"},
+        BadInput{"NoVolumeLightSampling", R"({"integrator": {"enable_volume_light_sampling": false}})", "", "integrator.enable_volume_light_sampling", "false is not supported"},
         BadInput{"NearestGatherDebiased", R"({"integrator": {"type": "photon_map", "gather_radius": 0.1, "gather_photon_count": 20, "debias": {"estimator": "single_term"}}})", "", "integrator.gather_photon_count", "cannot be debiased"},
         BadInput{"NearestGatherTooMany", R"({"integrator": {"type": "photon_map", "gather_radius": 0.1, "gather_photon_count": 65}})", "", "integrator.gather_photon_count", ""},
         BadInput{"NearestGatherNegative", R"({"integrator": {"type": "photon_map", "gather_radius": 0.1, "gather_photon_count": -1}})", "", "integrator.gather_photon_count", ""},

@@ -82,6 +82,8 @@ private:
     // Bookkeeping of keys (scene_reader.cpp)
     void ignore(const std::string& key);
     void ignoreUnread(const json& obj, const std::string& key, const std::vector<std::string_view>& read);
+    // A boolean switch of which Telescope renders only `supported`: the other value fails with why.
+    void onlyBoolean(const json& v, const std::string& key, const char* name, bool supported, const char* why);
     // Telescope's own objects are read strictly: every key must be known.
     void rejectUnknownKeys(const json& obj, const std::string& key, std::initializer_list<std::string_view> known) const;
     void rejectMedia(const json& obj, const std::string& key, std::initializer_list<std::string_view> keys) const;

@@ -134,8 +134,13 @@ void SceneReader::readIntegrator(const json& v) {
             fail(key + "." + name, "false is not supported (Telescope renders every scattering order and the "
                                    "surfaces, Tungsten's default true)");
 
+    onlyBoolean(v, key, "enable_consistency_checks", false,
+                "Telescope does not drop paths whose shading and geometric normals disagree (Tungsten's checks)");
+    onlyBoolean(v, key, "enable_volume_light_sampling", true,
+                "Telescope samples a light at every medium scattering vertex when enable_light_sampling is on");
     ignoreUnread(v, key, {"type", "min_bounces", "max_bounces", "enable_light_sampling", "enable_two_sided_shading", "debias",
-                          "transmittance_estimator", "low_order_scattering", "include_surfaces"});
+                          "transmittance_estimator", "low_order_scattering", "include_surfaces",
+                          "enable_consistency_checks", "enable_volume_light_sampling"});
 }
 
 // photon_map and progressive_photon_map: Tungsten's keys (photon_count, gather_radius, alpha,
@@ -200,9 +205,11 @@ void SceneReader::readPhotonSettings(const json& v, const std::string& key) {
     }
     if (const json* t = find(v, "test_radiance_scaling"))
         p.testRadianceScaling = boolean(*t, "integrator.test_radiance_scaling");
+    onlyBoolean(v, key, "enable_consistency_checks", false,
+                "Telescope does not drop paths whose shading and geometric normals disagree (Tungsten's checks)");
     ignoreUnread(v, key, {"type", "min_bounces", "max_bounces", "enable_two_sided_shading", "photon_count",
                           "gather_radius", "alpha", "kernel", "direct_lighting", "debias", "gather_photon_count",
-                          "test_radiance_scaling"});
+                          "test_radiance_scaling", "enable_consistency_checks"});
 }
 
 // Photon mapping's blocks (docs/PHOTON-MAPPING.md): the geometric level pmf (r = 0.7 by default,
@@ -328,10 +335,34 @@ PmfSettings SceneReader::readPmf(const json& v, const std::string& key, PmfSetti
 
 // ---- Renderer ----
 
+// Tungsten's switches whose one value Telescope renders: that value is honoured (read, not listed as
+// ignored), any other is refused naming the key (it would change the image: a silent substitution).
+void SceneReader::onlyBoolean(const json& v, const std::string& key, const char* name, bool supported,
+                              const char* why) {
+    if (const json* b = find(v, name); b && boolean(*b, member(key, name)) != supported)
+        fail(member(key, name), fmt::format("{} is not supported: {}", supported ? "false" : "true", why));
+}
+
 void SceneReader::readRenderer(const json& v) {
     expectObject(v, "renderer");
     if (const json* spp = find(v, "spp")) scene_.renderer.spp = integer(*spp, "renderer.spp", 1, kMaxSpp);
-    ignoreUnread(v, "renderer", {"spp"});
+    onlyBoolean(v, "renderer", "stratified_sampler", false,
+                "Telescope draws independent random numbers per sample (a stratified sampler changes the noise "
+                "of the image); remove the key or set it to false");
+    onlyBoolean(v, "renderer", "enable_resume_render", false,
+                "resume a render with --checkpoint FILE and --resume FILE instead");
+    // Tungsten's time limits, "0" (or 0) = none: the command line's --time and --checkpoint-every.
+    for (const char* name : {"timeout", "checkpoint_interval"}) {
+        const json* t = find(v, name);
+        if (!t) continue;
+        const bool zero = (t->is_string() && (t->get<std::string>() == "0" || t->get<std::string>().empty())) ||
+                          (t->is_number() && t->get<double>() == 0.0);
+        if (!zero)
+            fail(member("renderer", name),
+                 fmt::format("only \"0\" (none) is supported in the scene; give the limit on the command line "
+                             "with {}", std::string(name) == "timeout" ? "--time SECONDS" : "--checkpoint-every SECONDS"));
+    }
+    ignoreUnread(v, "renderer", {"spp", "stratified_sampler", "enable_resume_render", "timeout", "checkpoint_interval"});
 }
 
 void SceneReader::readTransmittanceEstimator(const json& v, const std::string& key) {
