@@ -216,7 +216,9 @@ uint32_t nearestMismatches(uint32_t photonCount, float size, float radius, uint3
 TEST_F(PhotonGrid, NearestPhotonsMatchBruteForceAndTheWrongRadiusDoesNot) {
     // Sparse (some queries find fewer than k within r_b, so r_b is the radius) and crowded cells
     // (several gather slices carry the k nearest between dispatches), k from 1 to the maximum.
-    // 20000 photons in a cube of side 2: about 84 within 0.2 of a query, 5 within 0.08.
+    // 20000 photons in a cube of side 2: about 84 within 0.2 of a query, 5 within 0.08. k = 1 takes
+    // the uniform kernel: with the cone (zero at the edge) its estimate is identically 0, and the
+    // H200 returned 2e-7 there (d^2 / r^2 a rounding below 1), a mismatch of nothing.
     struct Case {
         uint32_t photons;
         float size, radius;
@@ -225,7 +227,7 @@ TEST_F(PhotonGrid, NearestPhotonsMatchBruteForceAndTheWrongRadiusDoesNot) {
         uint32_t queries = 256;
     };
     for (Case c : {Case{20000, 2.0f, 0.2f, 20, kKernelUniform, false}, Case{20000, 2.0f, 0.08f, 20, kKernelUniform, true},
-                   Case{5000, 2.0f, 0.3f, 1, kKernelCone, false},
+                   Case{5000, 2.0f, 0.3f, 1, kKernelUniform, false},
                    Case{20000, 2.0f, 0.25f, kMaxGatherCount, kKernelEpanechnikov, false},
                    Case{300000, 1.0f, 0.5f, 20, kKernelUniform, false, 32}}) {
         const uint32_t queries = c.queries;

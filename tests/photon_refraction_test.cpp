@@ -36,11 +36,11 @@ Scene pool(const std::string& integrator) {
 }
 
 // The path tracer's region means (red channel) and the variance of each mean: finite variance
-// (bounded emission, Russian roulette with throughput <= 1 after it), so the CLT holds at 8192 spp
+// (bounded emission, Russian roulette with throughput <= 1 after it), so the CLT holds at 4096 spp
 // per pixel and 16 pixels per region. Rendered once for both tests.
 const std::vector<RegionMean>& pathTracedRegions() {
     static const std::vector<RegionMean> regions =
-        blockMeans(renderFilm(pool(R"({"type": "path_tracer", "max_bounces": 64})"), 8192, 11), kBlock);
+        blockMeans(renderFilm(pool(R"({"type": "path_tracer", "max_bounces": 64})"), 4096, 11), kBlock);
     return regions;
 }
 
@@ -109,7 +109,7 @@ protected:
 
 TEST_F(PhotonRefraction, UnbiasedBlocksThroughWaterMatchThePathTracerAndTheOldScalingFails) {
     const std::vector<RegionMean> reference = pathTracedRegions();
-    const std::string unbiased = R"({"type": "photon_map", "photon_count": 20000, "gather_radius": 0.2,
+    const std::string unbiased = R"({"type": "photon_map", "photon_count": 10000, "gather_radius": 0.2,
         "max_bounces": 64, "debias": {"estimator": "single_term", "level_schedule": "uniform"})";
     const Verdict right = compare(batchMeans(pool(unbiased + "}"), 32, 4, 5), reference, "scaled");
     EXPECT_EQ(right.tFailures, 0u);
