@@ -29,6 +29,29 @@ struct GatherSums {
     uint found;       // photons within r_b on the front side
 };
 
+// The sorted photons of cell c (0..7) of the 2x2x2 cells around a query (low: gridNeighbourhood)
+// that a slice starting at sliceBegin reads, [first, last) with at most sliceLength of them; empty
+// when an earlier cell of the neighbourhood shares the bucket (each bucket is read once: visited
+// holds the earlier cells' buckets) or the bucket ends before the slice.
+void neighbourhoodBucket(PhotonMapRef map, ivec3 low, uint c, uint sliceBegin, uint sliceLength,
+                         inout uint visited[8], out uint first, out uint last) {
+    UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
+    uint h = gridHash(low + ivec3(int(c & 1u), int((c >> 1u) & 1u), int(c >> 2u)), map.h.tableSize);
+    bool seen = false;
+    for (uint k = 0u; k < c; ++k) seen = seen || visited[k] == h;
+    visited[c] = h;
+    first = 0u;
+    last = 0u;
+    if (seen) return;
+    // The scatter left the end of bucket h's range in cellStart[h], so bucket h - 1's end is
+    // where h begins (hash_grid_build.comp).
+    uint begin = h == 0u ? 0u : cellStart.v[h - 1u];
+    uint count = cellStart.v[h] - begin;
+    if (sliceBegin >= count) return;
+    first = begin + sliceBegin;
+    last = first + min(count - sliceBegin, sliceLength);
+}
+
 // rb2 = r_b^2; logRadius2 = ln(r^2 / r_b^2), logStep2 = ln(r'^2 / r^2); no difference when
 // difference is false. Photons stored at a light-path vertex beyond maxVertex are left out (the
 // full path would have more scattering vertices than max_bounces allows: photon_trace.comp).
@@ -38,28 +61,14 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
     s.base = vec3(0.0);
     s.difference = vec3(0.0);
     s.found = 0u;
-    float cellSize = map.h.cellSize;
-    uint tableSize = map.h.tableSize;
     Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
-    UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
     float rj2 = rb2 * exp(logRadius2);
 
-    ivec3 low = gridNeighbourhood(x, cellSize);
+    ivec3 low = gridNeighbourhood(x, map.h.cellSize);
     uint visited[8];
     for (uint c = 0u; c < 8u; ++c) {
-        uint h = gridHash(low + ivec3(int(c & 1u), int((c >> 1u) & 1u), int(c >> 2u)), tableSize);
-        // Two cells of the neighbourhood may share a bucket: visit each bucket once.
-        bool seen = false;
-        for (uint k = 0u; k < c; ++k) seen = seen || visited[k] == h;
-        visited[c] = h;
-        if (seen) continue;
-        // The scatter left the end of bucket h's range in cellStart[h], so bucket h - 1's end is
-        // where h begins (hash_grid_build.comp).
-        uint begin = h == 0u ? 0u : cellStart.v[h - 1u];
-        uint count = cellStart.v[h] - begin;
-        if (sliceBegin >= count) continue;
-        uint first = begin + sliceBegin;
-        uint last = first + min(count - sliceBegin, kGatherSlicePhotons);
+        uint first, last;
+        neighbourhoodBucket(map, low, c, sliceBegin, kGatherSlicePhotons, visited, first, last);
         for (uint i = first; i < last; ++i) {
             // The position first: most photons of the cells lie beyond r_b, and the rest of the
             // photon is read only for those within (measured 7% faster than reading it whole).
@@ -121,23 +130,12 @@ void nearestReplaceFarthest(inout NearestPhotons s, uint k, float d2, uint index
 // Photons sliceBegin .. sliceBegin + gatherSlicePhotons(k) - 1 of each bucket around x (the
 // buckets of gatherPhotons) offered to the k nearest kept in s.
 void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint k, uint sliceBegin, inout NearestPhotons s) {
-    float cellSize = map.h.cellSize;
-    uint tableSize = map.h.tableSize;
     Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
-    UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
-    ivec3 low = gridNeighbourhood(x, cellSize);
+    ivec3 low = gridNeighbourhood(x, map.h.cellSize);
     uint visited[8];
     for (uint c = 0u; c < 8u; ++c) {
-        uint h = gridHash(low + ivec3(int(c & 1u), int((c >> 1u) & 1u), int(c >> 2u)), tableSize);
-        bool seen = false;
-        for (uint q = 0u; q < c; ++q) seen = seen || visited[q] == h;
-        visited[c] = h;
-        if (seen) continue;
-        uint begin = h == 0u ? 0u : cellStart.v[h - 1u];
-        uint count = cellStart.v[h] - begin;
-        if (sliceBegin >= count) continue;
-        uint first = begin + sliceBegin;
-        uint last = first + min(count - sliceBegin, gatherSlicePhotons(k));
+        uint first, last;
+        neighbourhoodBucket(map, low, c, sliceBegin, gatherSlicePhotons(k), visited, first, last);
         for (uint i = first; i < last; ++i) {
             vec3 d = x - uintBitsToFloat(sortedTexel(sorted, 2u * i).xyz);
             float d2 = dot(d, d);

@@ -25,6 +25,19 @@ glm::vec3 direction(Rng& rng) {
     return glm::vec3(s * std::cos(phi), s * std::sin(phi), z);
 }
 
+// Photons uniform in a cube of side `size` centred at the origin, power.x in [0.5, 1.5), uniform
+// directions, stored at vertex 1.
+std::vector<Photon> randomPhotons(uint32_t count, float size, Rng& rng) {
+    std::vector<Photon> photons(count);
+    for (Photon& p : photons) {
+        p.position = (glm::vec3(rngNext(rng), rngNext(rng), rngNext(rng)) - 0.5f) * size;
+        p.power = glm::vec3(0.5f + rngNext(rng), 0.0f, 0.0f);
+        p.direction = encodeDirection(direction(rng));
+        p.vertex = 1;
+    }
+    return photons;
+}
+
 struct Sums {
     double base = 0.0, difference = 0.0, magnitude = 0.0;
     uint32_t found = 0;
@@ -58,13 +71,7 @@ Sums bruteForce(const std::vector<Photon>& photons, glm::vec3 x, glm::vec3 n, fl
 void compareWithBruteForce(uint32_t photonCount, float size, float radius, uint32_t kernel, uint32_t queryCount,
                            uint32_t seed, bool byAddress = false, PhotonMap* map = nullptr) {
     Rng rng = rngCreate(seed, 1, 2);
-    std::vector<Photon> photons(photonCount);
-    for (Photon& p : photons) {
-        p.position = (glm::vec3(rngNext(rng), rngNext(rng), rngNext(rng)) - 0.5f) * size;
-        p.power = glm::vec3(0.5f + rngNext(rng), 0.0f, 0.0f);
-        p.direction = encodeDirection(direction(rng));
-        p.vertex = 1;
-    }
+    const std::vector<Photon> photons = randomPhotons(photonCount, size, rng);
     std::vector<glm::vec3> xs(queryCount), ns(queryCount);
     for (uint32_t i = 0; i < queryCount; ++i) {
         if (i % 2 == 0) xs[i] = photons[rngNextUint(rng) % photonCount].position + direction(rng) * (radius * rngNext(rng));
@@ -184,13 +191,7 @@ uint32_t nearestMismatches(uint32_t photonCount, float size, float radius, uint3
                            uint32_t kth, uint32_t queryCount, uint32_t seed, bool byAddress = false,
                            bool sparse = false) {
     Rng rng = rngCreate(seed, 1, 2);
-    std::vector<Photon> photons(photonCount);
-    for (Photon& p : photons) {
-        p.position = (glm::vec3(rngNext(rng), rngNext(rng), rngNext(rng)) - 0.5f) * size;
-        p.power = glm::vec3(0.5f + rngNext(rng), 0.0f, 0.0f);
-        p.direction = encodeDirection(direction(rng));
-        p.vertex = 1;
-    }
+    const std::vector<Photon> photons = randomPhotons(photonCount, size, rng);
     std::vector<glm::vec3> xs(queryCount), ns(queryCount);
     for (uint32_t i = 0; i < queryCount; ++i) {
         xs[i] = (glm::vec3(rngNext(rng), rngNext(rng), rngNext(rng)) - 0.5f) * size;
