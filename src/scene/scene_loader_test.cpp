@@ -135,7 +135,7 @@ TEST(SceneLoader, CornellBoxIgnoredKeysAreListedOnce) {
     // Honoured (the one value Telescope renders), not ignored:
     for (const char* key : {"integrator.enable_volume_light_sampling", "integrator.enable_consistency_checks",
                             "renderer.stratified_sampler", "renderer.enable_resume_render", "renderer.timeout",
-                            "renderer.checkpoint_interval"})
+                            "renderer.checkpoint_interval", "renderer.adaptive_sampling"})
         EXPECT_FALSE(hasIgnored(s, key)) << key;
     // Every key left ignored says why it cannot change the EXR.
     for (const std::string& key : s.ignoredKeys) EXPECT_FALSE(ignoredKeyReason(key).empty()) << key;
@@ -875,6 +875,9 @@ TEST(TungstenExampleScenes, NonExponentialLoadsWithItsFourModels) {
     EXPECT_EQ(s.camera.height, 512u);
     EXPECT_EQ(s.integrator.maxBounces, 3u);
     EXPECT_EQ(pathDepthK(s.integrator), 2u);
+    // Its adaptive_sampling true is not honoured, and says so.
+    EXPECT_NE(std::find(s.ignoredKeys.begin(), s.ignoredKeys.end(), "renderer.adaptive_sampling"), s.ignoredKeys.end());
+    EXPECT_EQ(ignoredKeyReason("renderer.adaptive_sampling").rfind("NOT HONOURED", 0), 0u);
 }
 
 TEST(TungstenExampleScenes, VolumetricCausticAsksForBdptAndLoadsPathTraced) {
