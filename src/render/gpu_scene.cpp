@@ -200,7 +200,10 @@ GpuScene buildGpuScene(const Scene& scene) {
     // ---- Prims and area lights ----
     std::vector<float> power;
     std::vector<glm::vec4> uvRecords;  // two per prim slot (shared/texture.h primUv), textured scenes only
-    std::vector<glm::vec4> shading;    // three per prim slot (kBindingShadingNormals)
+    // Three vec4 per prim slot (kBindingShadingNormals), only in scenes with smooth triangles.
+    f.smoothNormals = std::any_of(scene.geometry.begin(), scene.geometry.end(), [](const Geometry& g) { return g.smooth; });
+    if (f.smoothNormals) out.shadingNormals.reserve(3 * bvh.order.size());
+    else out.shadingNormals.assign(1, glm::vec4(0.0f));
     out.prims.reserve(bvh.order.size());
     for (uint32_t slot = 0; slot < bvh.order.size(); ++slot) {
         const Geometry& g = scene.geometry[bvh.order[slot]];
@@ -237,16 +240,13 @@ GpuScene buildGpuScene(const Scene& scene) {
                 uvRecords.push_back({g.uvFrame[1], 0.0f});
             }
         }
-        if (g.smooth) f.smoothNormals = true;
-        for (int k = 0; k < 3; ++k)
-            shading.push_back(glm::vec4(g.smooth ? g.vertexNormal[k] : g.normal, k == 0 && g.smooth ? 1.0f : 0.0f));
+        if (f.smoothNormals)  // (n0, 1) (n1, 0) (n2, 0) for a smooth triangle; w = 0 reads the geometric normal
+            for (int k = 0; k < 3; ++k)
+                out.shadingNormals.push_back(g.smooth ? glm::vec4(g.vertexNormal[k], k == 0 ? 1.0f : 0.0f) : glm::vec4(0.0f));
         out.prims.push_back(p);
         out.primMedia.push_back(g.hasMedia ? uint32_t(g.intMedium + 1) | (uint32_t(g.extMedium + 1) << 16)
                                            : shader::kPrimMediaNone);
     }
-
-    if (f.smoothNormals) out.shadingNormals = std::move(shading);
-    else out.shadingNormals.assign(1, glm::vec4(0.0f));
 
     // ---- Point lights and the environment ----
     for (const PointLikeLight& pl : scene.lights) {
