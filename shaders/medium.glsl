@@ -193,6 +193,7 @@ vec3 trTrackGrid(uint mode, TrSegment s, inout Rng rng, inout uint lookups) {
     float mu = sMax * (mode == kTrEstResidualRatioTracking ? 0.5 * (mm.y - mm.x) : mm.y);
     if (mode == kTrEstResidualRatioTracking) result *= exp(-s.sigmaT * (control * tCell));
     for (uint guard = 0u; guard < kTrMaxGridSteps; ++guard) {
+        if (LOOP_BUDGET_SPENT(1u)) break;
         float tc = mu > 0.0 ? t - log(1.0 - rngNext(rng)) / mu : kInfinity;
         if (tc < tCell) {
             // A tentative collision inside the cell
@@ -305,6 +306,7 @@ vec3 shadowTransmittance(vec3 o, vec3 d, float tMax, uint medium, bool startOnSu
     crossings = 0u;
     vec3 tr = vec3(1.0);
     for (uint guard = 0u; guard < 256u; ++guard) {
+        if (LOOP_BUDGET_SPENT(1u)) break;
         Hit hit;
         bool found = traceClosest(o, d, tMax, hit);
         float end = found ? hit.t : tMax;

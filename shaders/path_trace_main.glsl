@@ -3,6 +3,10 @@
 // path_trace.comp and path_trace_glossy.comp (GLSL only; included after #version).
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 
+// The loop budget's counting (shared/lang.h; kLoopBudget and gLoopTicks are declared below).
+#define LOOP_BUDGET_TICK(n) gLoopTicks += (n)
+#define LOOP_BUDGET_SPENT(n) (kLoopBudget != 0u && (gLoopTicks += (n)) > kLoopBudget)
+
 #include "shared/gpu_types.h"
 #include "shared/rng.h"
 #include "shared/sampling.h"
@@ -11,6 +15,10 @@
 #include "accumulate.glsl"
 
 layout(local_size_x = kPathTraceGroupSize, local_size_y = kPathTraceGroupSize) in;
+
+// ---- Loop budget (shared/gpu_types.h "Lavapipe's loop cap") ----
+layout(constant_id = kSpecLoopBudget) const uint kLoopBudget = 0u;
+uint gLoopTicks = 0u;  // loop iterations this lane has counted in this dispatch
 
 layout(constant_id = kSpecMaxBounces) const uint kMaxBounces = 64u;
 layout(constant_id = kSpecMinBounces) const uint kMinBounces = 0u;
@@ -71,9 +79,9 @@ layout(push_constant) uniform Push { PathTracePush pc; };
 // shared/pixel_filter.h); it multiplies the sample's base and correction when the path ends.
 float gFilterWeight = 1.0;
 
-// Camera ray of sample s (shared/camera.h) and the level drawn for it.
-PathState startSample(uvec2 pixel, uint pixelIndex, uint s, LevelPmf pmf, out Rng rng) {
-    rng = rngCreate(pixelIndex, pc.sampleBase + s, pc.seed);
+// Camera ray of the sample of global index g (shared/camera.h) and the level drawn for it.
+PathState startSample(uvec2 pixel, uint pixelIndex, uint g, LevelPmf pmf, out Rng rng) {
+    rng = rngCreate(pixelIndex, g, pc.seed);
     float u1 = rngNext(rng), u2 = rngNext(rng);
     vec2 film = cameraFilmPoint(kFilter, pixel, vec2(u1, u2), gFilterWeight);
     vec3 dir = cameraRayDirection(film, pc.width, pc.height, pc.planeDistance, pc.cameraRight, pc.cameraUp,
@@ -83,7 +91,7 @@ PathState startSample(uvec2 pixel, uint pixelIndex, uint s, LevelPmf pmf, out Rn
         level = pc.pilotLevel;
     } else if (kDebiasMode != kDebiasNone) {
         if (kLevelSchedule == kLevelScheduleUniform) {
-            Rng levelRng = rngCreate(0xffffffffu, pc.sampleBase + s, pc.seed);  // the same for every pixel
+            Rng levelRng = rngCreate(0xffffffffu, g, pc.seed);  // the same for every pixel
             level = levelSample(pmf, rngNext(levelRng));
         } else {
             level = levelSample(pmf, rngNext(rng));  // level_queue.glsl drawLevel() repeats this draw
@@ -111,7 +119,7 @@ PathState startItem(uint item, LevelPmf pmf, out Rng rng) {
     uint pixelCount = pc.width * pc.height;
     uint pixelIndex = item % pixelCount;
     uvec2 pixel = uvec2(pixelIndex % pc.width, pixelIndex / pc.width);
-    return startSample(pixel, pixelIndex, item / pixelCount, pmf, rng);
+    return startSample(pixel, pixelIndex, pc.sampleBase + item / pixelCount, pmf, rng);
 }
 
 void queuedMain(LevelPmf pmf) {
@@ -134,9 +142,75 @@ void queuedMain(LevelPmf pmf) {
     }
 }
 
+// ---- Continuation records: a path carried to the next dispatch (kSpecLoopBudget) ----
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer RecordRef { uvec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer LoopStatsRef { uint u[]; };
+
+LoopStatsRef loopStats() { return LoopStatsRef(uvec2(pc.statsAddressLo, pc.statsAddressHi)); }
+RecordRef recordOf(uint lane) {
+    uint64_t base = packUint2x32(uvec2(pc.stateAddressLo, pc.stateAddressHi));
+    return RecordRef(base + uint64_t(lane) * uint64_t(kContinuationVec4s * 16u));
+}
+
+// Saves the path before its step, its random state, its global sample index and what the lane
+// keeps for it; w of v[7] marks the record pending. Everything is stored as bits (uvec4): small
+// integers as floats would be denormals, which lavapipe flushes to zero.
+void saveRecord(uint lane, PathState p, Rng rng, uint g, float rays) {
+    RecordRef r = recordOf(lane);
+    r.v[0] = uvec4(floatBitsToUint(p.origin), floatBitsToUint(p.pdfPrev));
+    r.v[1] = uvec4(floatBitsToUint(p.dir), p.vertex);
+    r.v[2] = uvec4(floatBitsToUint(p.throughput), p.level);
+    r.v[3] = uvec4(floatBitsToUint(p.result.base), p.limit);
+    r.v[4] = uvec4(floatBitsToUint(p.result.correction), (p.specularPrev ? 1u : 0u) | (p.fromSurface ? 2u : 0u));
+    r.v[5] = uvec4(floatBitsToUint(p.lastVertex), p.medium);
+    r.v[6] = uvec4(p.mediumScatters, rng.state, rng.inc, g);
+    r.v[7] = uvec4(floatBitsToUint(gFilterWeight), floatBitsToUint(rays), 0u, 1u);
+    atomicAdd(loopStats().u[kLoopStatCarried], 1u);
+}
+
+// Takes the lane's pending record, if any: false (and nothing changed) when there is none.
+// (inout, not out: GLSL copies out parameters back even when the function did not set them.)
+bool takeRecord(uint lane, inout PathState p, inout Rng rng, inout uint g, inout float rays) {
+    RecordRef r = recordOf(lane);
+    uvec4 v7 = r.v[7];
+    if (v7.w == 0u) return false;
+    r.v[7] = uvec4(0u);
+    gFilterWeight = uintBitsToFloat(v7.x);
+    rays = uintBitsToFloat(v7.y);
+    uvec4 v0 = r.v[0], v1 = r.v[1], v2 = r.v[2], v3 = r.v[3], v4 = r.v[4], v5 = r.v[5], v6 = r.v[6];
+    p.origin = uintBitsToFloat(v0.xyz);
+    p.pdfPrev = uintBitsToFloat(v0.w);
+    p.dir = uintBitsToFloat(v1.xyz);
+    p.vertex = v1.w;
+    p.throughput = uintBitsToFloat(v2.xyz);
+    p.level = v2.w;
+    p.result.base = uintBitsToFloat(v3.xyz);
+    p.limit = v3.w;
+    p.result.correction = uintBitsToFloat(v4.xyz);
+    p.specularPrev = (v4.w & 1u) != 0u;
+    p.fromSurface = (v4.w & 2u) != 0u;
+    p.lastVertex = uintBitsToFloat(v5.xyz);
+    p.medium = v5.w;
+    p.mediumScatters = v6.x;
+    rng.state = v6.y;
+    rng.inc = v6.z;
+    g = v6.w;
+    atomicAdd(loopStats().u[kLoopStatResumed], 1u);
+    return true;
+}
+
+// Whether lavapipe's loop cap was reached in this invocation: once it is, every loop ends after
+// one iteration, so a loop of two (whose length the compiler cannot know) runs once.
+bool loopCapReached() {
+    uint two = 2u + (pc.width >> 31u), n = 0u;
+    for (uint i = 0u; i < two; ++i) ++n;
+    return n != two;
+}
+
 void main() {
     if (kLevelSchedule == kLevelScheduleQueued) {
         if (pc.sampleCount != 0u) queuedMain(LevelPmf(kPmfType, kPmfR, kPmfAlpha));
+        if (loopCapReached()) atomicAdd(loopStats().u[kLoopStatCapHits], 1u);
         return;
     }
     uvec2 pixel = gl_GlobalInvocationID.xy;
@@ -144,37 +218,68 @@ void main() {
     uint pixelIndex = pixel.y * pc.width + pixel.x;
     uint pixelCount = pc.width * pc.height;
     LevelPmf pmf = LevelPmf(kPmfType, kPmfR, kPmfAlpha);
-    if (pc.sampleCount == 0u) return;
+    // This dispatch traces the samples g < end of this pixel: a lane carrying a path from an
+    // earlier dispatch (whose samples come just before pc.sampleBase) finishes it first.
+    uint end = pc.sampleBase + pc.sampleCount;
+    uint g = pc.sampleBase;
+    Rng rng;
+    PathState path;
+    float rays = 0.0;
+    bool resumed = kLoopBudget != 0u && takeRecord(pixelIndex, path, rng, g, rays);
+    if (!resumed) {
+        if (g >= end) return;
+        path = startSample(pixel, pixelIndex, g, pmf, rng);
+    }
     SampleSums sums = sampleSumsZero();
     // pmf pilot: its own sums (kPilot*), D_j and I(k) of the same paths, and the rays traced.
     vec3 pilotD = vec3(0.0), pilotD2 = vec3(0.0), pilotBase = vec3(0.0), pilotBase2 = vec3(0.0);
     float pilotRays = 0.0, pilotDropped = 0.0;
 
-    uint s = 0u;
-    Rng rng;
-    PathState path = startSample(pixel, pixelIndex, s, pmf, rng);
-    float rays = 0.0;
-    while (true) {
+    bool working = true;
+    while (working) {
         if (kPilot) rays += 1.0;
-        if (pathStep(path, pmf, rng)) continue;
-        // ---- Path finished: accumulate, then start the next sample in the same lane ----
-        if (isWideFilter(kFilter)) path.result = PathResult(path.result.base * gFilterWeight, path.result.correction * gFilterWeight);
-        if (!kPilot) {
-            sampleSumsAdd(sums, path.result.base, path.result.correction);
-        } else if (!isFiniteVec(path.result.correction) || !isFiniteVec(path.result.base)) {
-            pilotDropped += 1.0;
-        } else {
-            vec3 d = path.result.correction, b = path.result.base;
-            pilotD += d;
-            pilotD2 += d * d;
-            pilotBase += b;
-            pilotBase2 += b * b;
-            pilotRays += rays;
+        // ---- One step, undone and carried to the next dispatch when it passed the budget ----
+        PathState before = path;
+        Rng rngBefore = rng;
+        uint ticksBefore = gLoopTicks;
+        LOOP_BUDGET_TICK(8u);  // this loop, and loops of the step entered with no lane active
+        bool more = pathStep(path, pmf, rng);
+        bool overlong = false;
+        if (kLoopBudget != 0u && gLoopTicks > kLoopBudget) {
+            if (ticksBefore != 0u) {
+                saveRecord(pixelIndex, before, rngBefore, g, kPilot ? rays - 1.0 : 0.0);
+                working = false;
+                more = true;  // not finished: carried
+            } else {
+                // The step alone passes the budget of a whole dispatch: the sample is dropped (as
+                // a non-finite one), counted, and reported as an error.
+                atomicAdd(loopStats().u[kLoopStatOverlong], 1u);
+                overlong = true;
+                more = false;
+            }
         }
-        rays = 0.0;
-        if (++s == pc.sampleCount) break;
-        path = startSample(pixel, pixelIndex, s, pmf, rng);
+        if (!more) {
+            // ---- Path finished: accumulate, then start the next sample in the same lane ----
+            if (isWideFilter(kFilter)) path.result = PathResult(path.result.base * gFilterWeight, path.result.correction * gFilterWeight);
+            if (overlong) path.result = PathResult(vec3(uintBitsToFloat(0x7f800000u)), vec3(0.0));  // counted as dropped
+            if (!kPilot) {
+                sampleSumsAdd(sums, path.result.base, path.result.correction);
+            } else if (!isFiniteVec(path.result.correction) || !isFiniteVec(path.result.base)) {
+                pilotDropped += 1.0;
+            } else {
+                vec3 d = path.result.correction, b = path.result.base;
+                pilotD += d;
+                pilotD2 += d * d;
+                pilotBase += b;
+                pilotBase2 += b * b;
+                pilotRays += rays;
+            }
+            rays = 0.0;
+            if (++g >= end) working = false;
+            else path = startSample(pixel, pixelIndex, g, pmf, rng);
+        }
     }
+    if (loopCapReached()) atomicAdd(loopStats().u[kLoopStatCapHits], 1u);
     if (kPilot) {
         AccumRef pilot = AccumRef(uvec2(pc.pilotAddressLo, pc.pilotAddressHi));
         accumulateAdd(pilot, kPilotCorrection, pixelIndex, pixelCount, vec4(pilotD, pilotDropped));

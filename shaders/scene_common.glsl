@@ -34,6 +34,7 @@ vec3 offsetRayOrigin(vec3 p, vec3 ng, vec3 dir) {
 uint pickLight(float u) {
     uint lo = 0u, hi = kLightCount - 1u;
     while (lo < hi) {
+        LOOP_BUDGET_TICK(1u);
         uint mid = (lo + hi) >> 1u;
         if (u < sceneLight(mid).cdf) hi = mid;
         else lo = mid + 1u;

@@ -18,7 +18,13 @@ Film renderFilm(const Scene& scene, uint64_t spp, uint32_t seed) {
     RenderRequest request;
     request.spp = spp;
     renderer.render(request);
+    expectLoopsComplete(renderer.stats());
     return renderer.film();
+}
+
+void expectLoopsComplete(const RenderStats& stats) {
+    EXPECT_EQ(stats.loops.capHits, 0u) << "lavapipe's loop cap was reached: loops ended early";
+    EXPECT_EQ(stats.loops.overlong, 0u) << "samples dropped by the loop budget";
 }
 
 void expectNoValidationMessages() {

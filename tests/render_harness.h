@@ -21,6 +21,9 @@ std::string sourcePath(const std::string& relative);
 Scene loadTestScene(const std::string& relative, const std::vector<SceneOverride>& overrides = {});
 Film renderFilm(const Scene& scene, uint64_t spp, uint32_t seed);
 
+// Fails the current test if lavapipe's loop cap ended loops or the loop budget dropped samples.
+void expectLoopsComplete(const RenderStats& stats);
+
 // Fails the current test if the validation layer reported anything.
 void expectNoValidationMessages();
 

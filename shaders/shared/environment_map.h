@@ -102,6 +102,7 @@ FN vec3 envRadiance(vec3 dirWorld) { return envLookup(envLocalToUv(envToLocal(di
 FN uint envSearchCdf(uint offset, uint n, float u, OUT(float) lo) {
     uint a = 0u, b = n - 1u;
     while (a < b) {
+        LOOP_BUDGET_TICK(1u);
         uint mid = (a + b) >> 1u;
         if (u < ENV_DATA(offset + mid)) b = mid;
         else a = mid + 1u;

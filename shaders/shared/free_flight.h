@@ -58,6 +58,7 @@ FN float sampleGuideDepth(TrModel model, bool fromSurface, float u) {
     uint form = fromSurface ? kFormSurfaceSurface : kFormSurfaceMedium;
     float target = 1.0f - u;
     float lo = 0.0f, hi = 1.0f;
+    LOOP_BUDGET_TICK(96u);  // the two loops below
     for (uint i = 0u; i < 64u && trForm(model, form, hi) > target; ++i) hi *= 2.0f;
     for (uint i = 0u; i < 32u; ++i) {
         float mid = 0.5f * (lo + hi);

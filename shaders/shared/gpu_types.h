@@ -167,6 +167,31 @@ CONST uint kSpecHasTextures = 22u;      // some material has a texture (uvs are 
 CONST uint kSpecEnvironmentMap = 23u;    // the environment light (kSpecEnvironmentLight) has an image
 CONST uint kSpecSmoothNormals = 25u;     // some triangle is smooth-shaded: read kBindingShadingNormals
 CONST uint kSpecTablesInUniforms = 24u;  // materials, lights and media read from the uniform bindings
+CONST uint kSpecLoopBudget = 26u;        // loop iterations a path_trace lane may run per dispatch (0: no limit)
+
+// ---- Lavapipe's loop cap and path_trace's loop budget (docs/ARCHITECTURE.md "Loop budget") ----
+// Lavapipe (llvmpipe) keeps one loop counter per SIMD group and shader invocation: every
+// iteration of every loop, in any lane or in none (a loop under a branch no lane took still runs
+// once), counts, and at 65535 every loop of the invocation ends, without a word. path_trace
+// therefore counts the loop iterations of each lane (gLoopTicks) and stops a lane whose count
+// passes kSpecLoopBudget after the step of its path that passed it: the step is undone (the
+// path state and random state from before it are kept) and the lane's path is carried to the
+// next dispatch in a continuation record; the host dispatches again until no record is left.
+// The budget is kLoopBudgetLanes-fold below the cap, since 8 lanes of a group may each spend it
+// in turn, with half of it left for the loops every step enters with no lane active. A probe
+// after the work (loopCapReached in path_trace_main.glsl) sees whether the cap was reached
+// anyway and counts it (kLoopStatCapHits): then the result is wrong, and render says so.
+CONST uint kLavapipeLoopCap = 65535u;
+CONST uint kLoopBudgetLanes = 8u;  // lavapipe's SIMD width for 32-bit lanes (256-bit llvmpipe)
+CONST uint kDefaultLoopBudget = kLavapipeLoopCap / kLoopBudgetLanes / 2u;  // 4095
+// The loop statistics buffer (by device address, uint counters, cumulative over a render):
+CONST uint kLoopStatCapHits = 0u;   // lanes whose invocation reached lavapipe's cap (an error)
+CONST uint kLoopStatCarried = 1u;   // paths carried to a later dispatch (continuation records written)
+CONST uint kLoopStatResumed = 2u;   // continuation records resumed
+CONST uint kLoopStatOverlong = 3u;  // samples dropped: one step of the path alone passed the budget (an error)
+CONST uint kLoopStatCount = 4u;
+// A continuation record: kContinuationVec4s vec4 per lane (path_trace_main.glsl saveRecord).
+CONST uint kContinuationVec4s = 8u;
 
 // Participating media, ids 32..47 (shaders/medium.glsl).
 CONST uint kSpecHasMedia = 32u;          // media or forward (index-matched) boundaries present
@@ -196,6 +221,8 @@ struct PathTracePush {
     uint queueAddressLo; uint queueAddressHi;  // level queue (kLevelScheduleQueued only)
     uint queueCapacity;                        // items the level queue holds
     uint pilotAddressLo; uint pilotAddressHi;  // pmf pilot only: its result buffer (kPilot*)
+    uint stateAddressLo; uint stateAddressHi;  // continuation records (kContinuationVec4s per lane)
+    uint statsAddressLo; uint statsAddressHi;  // loop statistics (kLoopStat*)
 };
 
 // The pmf pilot's result buffer (render/pmf_pilot.h): per pixel, compensated (hi, lo) sums of
@@ -240,7 +267,7 @@ CONST uint kChannelCount = 6u;
 
 SHADER_NAMESPACE_END
 #ifdef __cplusplus
-static_assert(sizeof(telescope::shader::PathTracePush) == 104);
+static_assert(sizeof(telescope::shader::PathTracePush) == 120);  // at most 128 (Vulkan's guaranteed push constants)
 #endif
 
 // ---- Photon mapping passes (photon_trace, hash_grid_build, gather; docs/ESTIMATORS.md section 3) ----

@@ -31,6 +31,16 @@
 #define SHADER_NAMESPACE_END
 #endif
 
+// LOOP_BUDGET_SPENT(n): counts n loop iterations of this lane against its loop budget and says
+// whether the budget is spent (shared/gpu_types.h, "Lavapipe's loop cap"); LOOP_BUDGET_TICK(n)
+// only counts. Long data-dependent loops stop when the budget is spent; short bounded ones only
+// count. A shader with a budget (path_trace) defines both before its includes; everywhere else
+// they fold away.
+#ifndef LOOP_BUDGET_SPENT
+#define LOOP_BUDGET_SPENT(n) false
+#define LOOP_BUDGET_TICK(n)
+#endif
+
 SHADER_NAMESPACE_BEGIN
 CONST float kPi = 3.14159265358979323846f;
 CONST float kInvPi = 0.31830988618379067154f;

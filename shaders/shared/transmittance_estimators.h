@@ -71,6 +71,7 @@ FN float combSum(TrSegment s, float u, uint first, uint stride, uint count, floa
     TR_PRECISE float sum = 0.0f;
     TR_PRECISE float err = 0.0f;
     float scale = s.len / n;
+    if (LOOP_BUDGET_SPENT(max(count, 1u))) return 0.0f;
     for (uint i = 0u; i < count; ++i) {
         TR_PRECISE float y = trDensity(s, scale * (u + float(first + i * stride))) - err;
         TR_PRECISE float t = sum + y;
@@ -105,6 +106,7 @@ FN vec3 trDebiasedRayMarch(TrEstimator e, TrModel m, uint form, TrSegment s, INO
     // even/odd: compensated sums over the sub-combs (rounding would not cancel in <D_j>)
     TR_PRECISE float even = 0.0f, odd = 0.0f, evenErr = 0.0f, oddErr = 0.0f;
     for (uint i = 0u; i < subCombs; ++i) {
+        if (LOOP_BUDGET_SPENT(1u)) break;
         float sub = combSum(s, u, i, subCombs, subPoints, n, lookups);
         base += trForm3(m, form, s.sigmaT * ldexp(sub * s.len, -int(k)));
         if ((i & 1u) == 0u) {
@@ -162,6 +164,7 @@ FN vec3 trTrack(uint mode, TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
     if (!(mu > 0.0f)) return result;
     float t = 0.0f;
     for (uint guard = 0u; guard < 1000000u; ++guard) {
+        if (LOOP_BUDGET_SPENT(1u)) break;
         t -= log(1.0f - rngNext(rng)) / mu;
         if (t >= s.len) break;
         vec3 sigma = s.sigmaT * (trDensity(s, t) - control);
@@ -184,6 +187,8 @@ FN vec3 trUnbiasedRayMarch(TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
     uint points = uint(clamp(ceil(2.0f * spread), 1.0f, 256.0f));
     uint order = 0u;
     while (order < kTrMaxOrder && rngNext(rng) < kTrOrderQ) ++order;
+    // The order loop above and the pivot loops below: at most (kTrMaxOrder + 1)^2 + 2 (kTrMaxOrder + 1).
+    LOOP_BUDGET_TICK((order + 3u) * (order + 1u) + 1u);
     vec3 x[kTrMaxOrder + 1u];
     for (uint i = 0u; i <= order; ++i)
         x[i] = s.sigmaT * (combSum(s, rngNext(rng), 0u, 1u, points, float(points), lookups) * s.len / float(points));

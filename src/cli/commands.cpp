@@ -119,6 +119,18 @@ void checkValidation(const gpu::Context& context) {
             fmt::format("{} Vulkan validation message(s) were reported", context.validationMessageCount()));
 }
 
+// One line when lavapipe's loop cap may have ended loops, or the loop budget dropped samples
+// (shared/gpu_types.h "Lavapipe's loop cap"): those pixels are wrong. Printed even with --quiet.
+void warnLoopStats(const RenderStats& stats) {
+    const LoopStats& l = stats.loops;
+    if (l.capHits > 0)
+        fmt::print(stderr, "telescope: warning: lavapipe's loop cap was reached in {} lanes: their pixels are wrong "
+                   "(set TELESCOPE_LOOP_BUDGET lower, or report the scene)\n", l.capHits);
+    if (l.overlong > 0)
+        fmt::print(stderr, "telescope: warning: {} samples dropped: one step of their path ran more loop iterations "
+                   "than a dispatch allows (TELESCOPE_LOOP_BUDGET)\n", l.overlong);
+}
+
 void writeImages(const ImageOutputOptions& o, const Film& film, const OutputInfo& info) {
     ImageMetadata meta;
     meta.entries = {
@@ -193,6 +205,11 @@ void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Cont
         if (stats.samplesPerPixel > 0) j["photon_passes_per_sample"] = double(stats.photonPasses) / double(stats.samplesPerPixel);
     }
     j["non_finite_samples"] = film.nonFiniteSamples();
+    j["loop_budget"] = {{"cap_hits", stats.loops.capHits},
+                        {"carried_paths", stats.loops.carried},
+                        {"resumed_paths", stats.loops.resumed},
+                        {"dropped_overlong", stats.loops.overlong},
+                        {"drain_dispatches", stats.loops.drainDispatches}};
     j["validation_messages"] = context.validationMessageCount();
     j["estimator"] = renderer.plan().estimator;
     j["settings"] = resolvedSettings(scene);
@@ -247,6 +264,7 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
     renderer.render(request);
     progress.finish();
     checkValidation(context);
+    warnLoopStats(renderer.stats());
 
     Film film = renderer.film();
     const RenderStats& stats = renderer.stats();
@@ -340,6 +358,7 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
         renderer.render(request);
         elapsed += renderer.stats().wallSeconds - before;
         checkValidation(context);
+        warnLoopStats(renderer.stats());
         if (renderer.stats().samplesPerPixel > startSpp) saveCheckpoint(o.output.checkpointPath, checkpointOf(renderer.film(), info));
     }
     progress.finish();

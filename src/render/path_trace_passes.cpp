@@ -1,5 +1,8 @@
 // The path tracer's passes: one path_trace dispatch per unit, several samples per pixel each.
 #include <algorithm>
+#include <array>
+#include <cstdlib>
+#include <string>
 #include <cmath>
 #include <tuple>
 
@@ -171,7 +174,27 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecHasGrids, f.grids},
         {kSpecHasInhomogeneousMedia, f.inhomogeneous},
         {kSpecTrModel, sharedTransmittanceModel(scene)},
+        // Lavapipe's loop cap: lanes carry their paths on (deviceSceneSpec sets it per device);
+        // the queued schedule's lanes take items from a queue rebuilt every unit: no budget.
+        {kSpecLoopBudget, plan.levelSchedule == LevelSchedule::Queued ? 0u : kDefaultLoopBudget},
     };
+    if (plan.levelSchedule == LevelSchedule::Queued)
+        feature("loop budget", false, "",
+                "queued schedule: lanes are not carried across dispatches; a path ended by lavapipe's loop cap "
+                "is counted and reported");
+    else
+        feature("loop budget", true,
+                fmt::format("on lavapipe a lane stops after {} loop iterations per dispatch and carries its path "
+                            "to the next (its 65535-iteration loop cap ends loops silently)",
+                            kDefaultLoopBudget),
+                "");
+}
+
+uint32_t deviceLoopBudget(const gpu::Context& context) {
+    if (const char* v = std::getenv("TELESCOPE_LOOP_BUDGET"); v && *v) return uint32_t(std::strtoul(v, nullptr, 10));
+    const bool llvmpipe = context.cpuDevice() && std::string(context.properties().deviceName).find("llvmpipe") !=
+                                                     std::string::npos;
+    return llvmpipe ? shader::kDefaultLoopBudget : 0u;
 }
 
 // ---- Passes ----
@@ -185,6 +208,8 @@ public:
                     deviceSceneSpec(context, plan.pathTraceSpec), kPathTraceUniformBindings) {
         pipeline_.bindBuffers({b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims,
                                b.textures, b.environment, b.materials, b.lights, b.media, b.shadingNormals});
+        for (const auto& s : deviceSceneSpec(context, plan.pathTraceSpec))
+            if (s.id == shader::kSpecLoopBudget) loopBudget_ = s.value;
         const Camera& cam = scene.camera;
         setPushCamera(push_, cam);
         push_.width = cam.width;
@@ -200,11 +225,26 @@ public:
             push_.pilotAddressLo = uint32_t(pilot_.address());
             push_.pilotAddressHi = uint32_t(pilot_.address() >> 32);
         }
+        // Loop statistics, and continuation records where lanes carry paths (a budget).
+        loopStats_ = gpu::Buffer(context, shader::kLoopStatCount * sizeof(uint32_t), "loop statistics");
+        loopStats_.fill(0);
+        push_.statsAddressLo = uint32_t(loopStats_.address());
+        push_.statsAddressHi = uint32_t(loopStats_.address() >> 32);
+        if (loopBudget_ != 0) {
+            records_ = gpu::Buffer(context, pixels_ * shader::kContinuationVec4s * sizeof(glm::vec4), "continuation records");
+            records_.fill(0);
+            push_.stateAddressLo = uint32_t(records_.address());
+            push_.stateAddressHi = uint32_t(records_.address() >> 32);
+            drain_ = std::make_unique<gpu::CommandBatch>(context, 1);
+        }
         groupsX_ = (cam.width + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
         groupsY_ = (cam.height + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
         // About a million paths per dispatch, at most 16 samples per pixel in one thread.
         const uint64_t pixels = uint64_t(cam.width) * cam.height;
         samplesPerUnit_ = uint32_t(std::clamp<uint64_t>((1u << 20) / std::max<uint64_t>(pixels, 1), 1, 16));
+        // $TELESCOPE_SAMPLES_PER_DISPATCH: a test knob (the loop budget's tests vary it).
+        if (const char* v = std::getenv("TELESCOPE_SAMPLES_PER_DISPATCH"); v && *v)
+            samplesPerUnit_ = std::clamp<uint32_t>(uint32_t(std::strtoul(v, nullptr, 10)), 1, 1024);
         if (plan.levelSchedule == LevelSchedule::Queued) makeLevelQueue(context, plan, pixels * samplesPerUnit_);
     }
 
@@ -222,6 +262,36 @@ public:
         push_.sampleCount = samples;
         record(batch, push_, false);
         return samples;
+    }
+
+    // Paths carried past the batch's last dispatch are finished here, one dispatch at a time (each
+    // takes every carried path at least one step further), so that the film holds every sample
+    // the batch counted.
+    bool batchComplete(std::vector<gpu::DispatchTiming>& extra) override {
+        std::array<uint32_t, shader::kLoopStatCount> s = readLoopStats();
+        shader::PathTracePush drain = push_;
+        drain.sampleBase += drain.sampleCount;  // the end of the batch's samples: no new ones
+        drain.sampleCount = 0;
+        while (s[shader::kLoopStatCarried] != s[shader::kLoopStatResumed]) {
+            drain_->reserve(1);
+            drain_->begin();
+            drain_->dispatch(pipeline_, &drain, sizeof(drain), groupsX_, groupsY_, 1, "path_trace (carried)");
+            for (auto& t : drain_->submitAndWait()) extra.push_back(std::move(t));
+            ++drainDispatches_;
+            s = readLoopStats();
+        }
+        return true;
+    }
+
+    LoopStats loopStats() const override {
+        const std::array<uint32_t, shader::kLoopStatCount> s = readLoopStats();
+        LoopStats out;
+        out.capHits = s[shader::kLoopStatCapHits];
+        out.carried = s[shader::kLoopStatCarried];
+        out.resumed = s[shader::kLoopStatResumed];
+        out.overlong = s[shader::kLoopStatOverlong];
+        out.drainDispatches = drainDispatches_;
+        return out;
     }
 
     void setPilotLevel(uint32_t level) override {
@@ -298,6 +368,17 @@ private:
 
     std::unique_ptr<gpu::ComputePipeline> levelCount_, levelScan_, levelScatter_, pathResolve_;
     gpu::Buffer levelQueue_;
+    std::array<uint32_t, shader::kLoopStatCount> readLoopStats() const {
+        std::array<uint32_t, shader::kLoopStatCount> s{};
+        loopStats_.download(s.data(), sizeof(s));
+        return s;
+    }
+
+    gpu::Buffer loopStats_;  // kLoopStat* counters
+    gpu::Buffer records_;    // continuation records (a loop budget only)
+    std::unique_ptr<gpu::CommandBatch> drain_;
+    uint32_t loopBudget_ = 0;
+    uint64_t drainDispatches_ = 0;
     gpu::Buffer pilot_;  // pmf pilot only: kPilot* sums
     size_t pixels_ = 0;
     gpu::ComputePipeline pipeline_;

@@ -270,7 +270,7 @@ public:
         return blocks() && passInBlock_ + 1 < block_.passes ? 0 : 1;
     }
 
-    bool batchComplete() override {
+    bool batchComplete(std::vector<gpu::DispatchTiming>& /*extra*/) override {
         const uint64_t stored = map_.storedCount();
         const uint32_t fullest = map_.maxBucket();
         lastStored_ = stored;

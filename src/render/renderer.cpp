@@ -152,7 +152,14 @@ void Renderer::render(const RenderRequest& request) {
             stats_.passes[t.name].dispatches++;
             stats_.passes[t.name].gpuMs += t.gpuMs;
         }
-        if (!passes_->batchComplete()) continue;  // nothing was accumulated: run it again
+        std::vector<gpu::DispatchTiming> extra;
+        const bool complete = passes_->batchComplete(extra);
+        for (const auto& t : extra) {
+            stats_.passes[t.name].dispatches++;
+            stats_.passes[t.name].gpuMs += t.gpuMs;
+        }
+        stats_.loops = passes_->loopStats();
+        if (!complete) continue;  // nothing was accumulated: run it again
         stats_.photonPaths += passes_->photonPathsLastBatch();
         stats_.photonPasses += passes_->photonPathsLastBatch() ? units : 0;
         stats_.photonsStored += passes_->photonsStoredLastBatch();

@@ -66,6 +66,8 @@ struct RenderStats {
     uint64_t photonPasses = 0;   // photon mapping: photon passes (a block of the unbiased estimator has several)
     uint64_t photonsStored = 0;  // photon mapping: photons stored, all passes
     uint64_t photonMapBytes = 0; // photon mapping: device memory of the photon map now
+    // path_trace's loop budget (shared/gpu_types.h): capHits and overlong nonzero mean wrong pixels.
+    LoopStats loops;
     std::map<std::string, PassStats> passes;
 };
 

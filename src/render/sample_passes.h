@@ -41,6 +41,11 @@ void setPushCamera(Push& push, const Camera& cam) {
     push.planeDistance = shader::cameraPlaneDistance(cam.fovDegrees);
 }
 
+// path_trace's loop budget on this device (shared/gpu_types.h "Lavapipe's loop cap"):
+// kDefaultLoopBudget on lavapipe, 0 (none) on devices without its loop cap. $TELESCOPE_LOOP_BUDGET
+// overrides it (tests force tiny budgets with it; 0 turns the budget off).
+uint32_t deviceLoopBudget(const gpu::Context& context);
+
 // A plan's specialisation constants for this device: without the uniform scene (and so without
 // brute-force rays, which read it) where uniform buffers are smaller than kUniformSceneBytes, or
 // where the caller does not want it (uniformScene false); without the uniform tables where uniform
@@ -52,6 +57,7 @@ inline std::vector<gpu::SpecConstant> deviceSceneSpec(const gpu::Context& contex
         if ((!uniformScene || small) && (s.id == shader::kSpecSceneInUniforms || s.id == shader::kSpecBruteForcePrims))
             s.value = 0;
         if (small && s.id == shader::kSpecTablesInUniforms) s.value = 0;
+        if (s.id == shader::kSpecLoopBudget && s.value != 0) s.value = deviceLoopBudget(context);
     }
     return spec;
 }
@@ -80,6 +86,15 @@ struct RenderBuffers {
     const gpu::Buffer* shadingNormals = nullptr;  // binding kBindingShadingNormals of every scene pass
 };
 
+// Loop-budget counters of a render (shared/gpu_types.h kLoopStat*).
+struct LoopStats {
+    uint64_t capHits = 0;   // lanes whose invocation reached lavapipe's loop cap: wrong results (an error)
+    uint64_t carried = 0;   // paths carried to a later dispatch by the loop budget
+    uint64_t resumed = 0;   // carried paths taken up again (equals carried after every batch)
+    uint64_t overlong = 0;  // samples dropped because one step of their path passed the budget (an error)
+    uint64_t drainDispatches = 0;  // dispatches that only finished carried paths
+};
+
 class SamplePasses {
 public:
     virtual ~SamplePasses() = default;
@@ -94,8 +109,11 @@ public:
     // True between the units of a sample that takes several (a block of photon passes): a render
     // stopped by time finishes it first.
     virtual bool sampleInProgress() const { return false; }
-    // After the batch ran: false when it must be recorded and run again.
-    virtual bool batchComplete() { return true; }
+    // After the batch ran: false when it must be recorded and run again. Dispatches it ran itself
+    // (paths carried past the batch's last dispatch, finished) add their timings to `extra`.
+    virtual bool batchComplete(std::vector<gpu::DispatchTiming>& extra) { (void)extra; return true; }
+    // path_trace's loop statistics so far (shared/gpu_types.h kLoopStat*); zero for other passes.
+    virtual LoopStats loopStats() const { return {}; }
     // Photon mapping: photon paths traced and photons stored by the last complete batch.
     virtual uint64_t photonPathsLastBatch() const { return 0; }
     virtual uint64_t photonsStoredLastBatch() const { return 0; }
