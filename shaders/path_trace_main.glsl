@@ -2,10 +2,11 @@
 // its square, the base I(k) and the correction (docs/ESTIMATORS.md section 2). The body of
 // path_trace.comp and path_trace_glossy.comp (GLSL only; included after #version).
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_KHR_shader_subgroup_ballot : require
 
 // The loop budget's counting (shared/lang.h; kLoopBudget and gLoopTicks are declared below).
 #define LOOP_BUDGET_TICK(n) gLoopTicks += (n)
-#define LOOP_BUDGET_SPENT(n) (kLoopBudget != 0u && (gLoopTicks += (n)) > kLoopBudget)
+#define LOOP_BUDGET_SPENT(n) (kLoopBudget != 0u && (gLoopTicks += (n)) > gLoopBudget)
 
 #include "shared/gpu_types.h"
 #include "shared/rng.h"
@@ -19,6 +20,7 @@ layout(local_size_x = kPathTraceGroupSize, local_size_y = kPathTraceGroupSize) i
 // ---- Loop budget (shared/gpu_types.h "Lavapipe's loop cap") ----
 layout(constant_id = kSpecLoopBudget) const uint kLoopBudget = 0u;
 uint gLoopTicks = 0u;  // loop iterations this lane has counted in this dispatch
+uint gLoopBudget = kLoopBudget;  // kHeavyLoopBudget for a heavy record running alone
 
 layout(constant_id = kSpecMaxBounces) const uint kMaxBounces = 64u;
 layout(constant_id = kSpecMinBounces) const uint kMinBounces = 0u;
@@ -153,9 +155,9 @@ RecordRef recordOf(uint lane) {
 }
 
 // Saves the path before its step, its random state, its global sample index and what the lane
-// keeps for it; w of v[7] marks the record pending. Everything is stored as bits (uvec4): small
+// keeps for it; w of v[7] marks the record pending (1) or pending and heavy (2). Everything is stored as bits (uvec4): small
 // integers as floats would be denormals, which lavapipe flushes to zero.
-void saveRecord(uint lane, PathState p, Rng rng, uint g, float rays) {
+void saveRecord(uint lane, PathState p, Rng rng, uint g, float rays, bool heavy) {
     RecordRef r = recordOf(lane);
     r.v[0] = uvec4(floatBitsToUint(p.origin), floatBitsToUint(p.pdfPrev));
     r.v[1] = uvec4(floatBitsToUint(p.dir), p.vertex);
@@ -164,7 +166,7 @@ void saveRecord(uint lane, PathState p, Rng rng, uint g, float rays) {
     r.v[4] = uvec4(floatBitsToUint(p.result.correction), (p.specularPrev ? 1u : 0u) | (p.fromSurface ? 2u : 0u));
     r.v[5] = uvec4(floatBitsToUint(p.lastVertex), p.medium);
     r.v[6] = uvec4(p.mediumScatters, rng.state, rng.inc, g);
-    r.v[7] = uvec4(floatBitsToUint(gFilterWeight), floatBitsToUint(rays), 0u, 1u);
+    r.v[7] = uvec4(floatBitsToUint(gFilterWeight), floatBitsToUint(rays), 0u, heavy ? 2u : 1u);
     atomicAdd(loopStats().u[kLoopStatCarried], 1u);
 }
 
@@ -225,7 +227,19 @@ void main() {
     Rng rng;
     PathState path;
     float rays = 0.0;
-    bool resumed = kLoopBudget != 0u && takeRecord(pixelIndex, path, rng, g, rays);
+    bool resumed = false;
+    if (kLoopBudget != 0u) {
+        // A dispatch that only finishes carried paths (no new samples): in a group holding heavy
+        // records, the lowest lane holding one runs alone with kHeavyLoopBudget; the others keep
+        // their records for the next such dispatch.
+        uint state = recordOf(pixelIndex).v[7].w;
+        uvec4 heavyLanes = subgroupBallot(state == 2u);
+        if (pc.sampleCount == 0u && heavyLanes != uvec4(0u)) {
+            if (state != 2u || gl_SubgroupInvocationID != subgroupBallotFindLSB(heavyLanes)) return;
+            gLoopBudget = kHeavyLoopBudget;
+        }
+        if (state != 0u) resumed = takeRecord(pixelIndex, path, rng, g, rays);
+    }
     if (!resumed) {
         if (g >= end) return;
         path = startSample(pixel, pixelIndex, g, pmf, rng);
@@ -245,13 +259,14 @@ void main() {
         LOOP_BUDGET_TICK(8u);  // this loop, and loops of the step entered with no lane active
         bool more = pathStep(path, pmf, rng);
         bool overlong = false;
-        if (kLoopBudget != 0u && gLoopTicks > kLoopBudget) {
-            if (ticksBefore != 0u) {
-                saveRecord(pixelIndex, before, rngBefore, g, kPilot ? rays - 1.0 : 0.0);
+        if (kLoopBudget != 0u && gLoopTicks > gLoopBudget) {
+            if (ticksBefore != 0u || gLoopBudget < kHeavyLoopBudget) {
+                // Carried; heavy when the step passed the budget on its own
+                saveRecord(pixelIndex, before, rngBefore, g, kPilot ? rays - 1.0 : 0.0, ticksBefore == 0u);
                 working = false;
                 more = true;  // not finished: carried
             } else {
-                // The step alone passes the budget of a whole dispatch: the sample is dropped (as
+                // The step alone, running alone, passes kHeavyLoopBudget: the sample is dropped (as
                 // a non-finite one), counted, and reported as an error.
                 atomicAdd(loopStats().u[kLoopStatOverlong], 1u);
                 overlong = true;

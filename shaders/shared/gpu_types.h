@@ -184,6 +184,10 @@ CONST uint kSpecLoopBudget = 26u;        // loop iterations a path_trace lane ma
 CONST uint kLavapipeLoopCap = 65535u;
 CONST uint kLoopBudgetLanes = 8u;  // lavapipe's SIMD width for 32-bit lanes (256-bit llvmpipe)
 CONST uint kDefaultLoopBudget = kLavapipeLoopCap / kLoopBudgetLanes / 2u;  // 4095
+// A step that passes the budget on its own, at the start of a dispatch (a comb of 8192 points, a
+// long tracking walk), is carried as heavy: in the dispatches that finish carried paths, a group
+// holding heavy records runs only one of them, alone, with this budget; the others wait.
+CONST uint kHeavyLoopBudget = kLavapipeLoopCap / 8u * 7u;  // 57337
 // The loop statistics buffer (by device address, uint counters, cumulative over a render):
 CONST uint kLoopStatCapHits = 0u;   // lanes whose invocation reached lavapipe's cap (an error)
 CONST uint kLoopStatCarried = 1u;   // paths carried to a later dispatch (continuation records written)

@@ -24,11 +24,12 @@ SHADER_NAMESPACE_BEGIN
 // Largest comb of debiased marching: 2^kTrMaxCombLog2 points; deeper levels are marched at this
 // size (a truncation of the telescope). Why a cap at all: (1) in single precision the correction's
 // rounding error, about 1e-7 g, is divided by p(j), so its second moment grows like
-// sum_j 1e-14 / p(j); (2) lavapipe (llvmpipe) silently ends any loop after 65535 iterations per
-// SIMD group (its loop limiter), which would cut a deeper comb short. The truncation drops
-// E[D_j] = O(4^-j) for j >= 13, below 1e-8 for smooth g, with probability 0.35^(13-k) for the
+// sum_j 1e-14 / p(j); (2) lavapipe (llvmpipe) ends every loop of an invocation after 65535
+// iterations per SIMD group: a path step with two or three estimates of 2^13 points fits that,
+// running alone (gpu_types.h kHeavyLoopBudget), and one of 2^14 would not. The truncation drops
+// E[D_j] = O(4^-j) for j >= 12, below 1e-7 for smooth g, with probability 0.35^(12-k) for the
 // default pmf.
-CONST uint kTrMaxCombLog2 = 14u;
+CONST uint kTrMaxCombLog2 = 13u;
 // Unbiased ray marching: highest expansion order kept (P(N >= 16) = 4^-16 with q = 1/4).
 CONST uint kTrMaxOrder = 15u;
 CONST float kTrOrderQ = 0.25f;
@@ -145,7 +146,9 @@ FN bool trCollide(uint mode, vec3 sigma, float mu, INOUT(vec3) result, INOUT(Rng
         return trMaxComponent(result) != 0.0f;
     }
     result *= vec3(1.0f) - sigma / mu;
-    return true;
+    // A product that reached 0 (underflow in an optically thick segment) stays 0: stopping there
+    // changes no estimate, and keeps walks through tau = 1e4 short.
+    return trMaxComponent(abs(result)) != 0.0f;
 }
 
 // mode: delta (1 until a real collision per channel), ratio (prod 1 - sigma/mu), residual ratio
