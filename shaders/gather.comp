@@ -57,7 +57,7 @@ const uint kBlockStride = kGatherBlockVec4s + (kGatherCount + 1u) / 2u;
 
 uint passSeed(uint seed, uint passInBlock) { return passInBlock == 0u ? seed : seed ^ pcgHash(passInBlock); }
 
-void main() {
+void gatherPixel() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
     if (pixel.x >= pc.width || pixel.y >= pc.height) return;
     PhotonMapRef map = PhotonMapRef(uvec2(pc.headerLo, pc.headerHi));
@@ -188,4 +188,13 @@ void main() {
     sampleSumsAdd(sums, base, correction);
     sums.count = count;
     accumulateSums(AccumRef(uvec2(pc.accumLo, pc.accumHi)), pixelIndex, pc.width * pc.height, sums);
+}
+
+#include "loop_cap.glsl"
+
+void main() {
+    gatherPixel();
+    // lanes whose loops lavapipe's cap may have ended: the host reports them (an error)
+    if (loopCapReached(2u + (pc.width >> 31u)))
+        atomicAdd(PhotonMapRef(uvec2(pc.headerLo, pc.headerHi)).h.loopCapHits, 1u);
 }

@@ -4,9 +4,10 @@
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_KHR_shader_subgroup_ballot : require
 
-// The loop budget's counting (shared/lang.h; kLoopBudget and gLoopTicks are declared below).
+// The loop budget's counting (shared/lang.h; kLoopBudget, gLoopTicks and gLoopHardLimit are
+// declared below): every loop counts, only the long walks of media stop at the hard limit.
 #define LOOP_BUDGET_TICK(n) gLoopTicks += (n)
-#define LOOP_BUDGET_SPENT(n) (kLoopBudget != 0u && (gLoopTicks += (n)) > gLoopBudget)
+#define LOOP_BUDGET_SPENT(n) (kLoopBudget != 0u && (gLoopTicks += (n)) > gLoopHardLimit)
 
 #include "shared/gpu_types.h"
 #include "shared/rng.h"
@@ -20,7 +21,10 @@ layout(local_size_x = kPathTraceGroupSize, local_size_y = kPathTraceGroupSize) i
 // ---- Loop budget (shared/gpu_types.h "Lavapipe's loop cap") ----
 layout(constant_id = kSpecLoopBudget) const uint kLoopBudget = 0u;
 uint gLoopTicks = 0u;  // loop iterations this lane has counted in this dispatch
-uint gLoopBudget = kLoopBudget;  // kHeavyLoopBudget for a heavy record running alone
+// A lane starts no step past gLoopBudget (it carries its path instead); a walk that passes
+// gLoopHardLimit stops, and the lane's dispatch is undone and retried (main).
+uint gLoopBudget = kLoopBudget;
+uint gLoopHardLimit = kHeavyLoopBudget;
 
 layout(constant_id = kSpecMaxBounces) const uint kMaxBounces = 64u;
 layout(constant_id = kSpecMinBounces) const uint kMinBounces = 0u;
@@ -154,10 +158,15 @@ RecordRef recordOf(uint lane) {
     return RecordRef(base + uint64_t(lane) * uint64_t(kContinuationVec4s * 16u));
 }
 
-// Saves the path before its step, its random state, its global sample index and what the lane
-// keeps for it; w of v[7] marks the record pending (1) or pending and heavy (2). Everything is stored as bits (uvec4): small
-// integers as floats would be denormals, which lavapipe flushes to zero.
-void saveRecord(uint lane, PathState p, Rng rng, uint g, float rays, bool heavy) {
+// Record flags (v[7].w): pending; heavy (a step that cannot finish beside other lanes: it runs
+// alone in a dispatch that finishes carried paths); safe (the dispatch that ran it reached
+// lavapipe's cap or a walk's hard limit: it runs with kSafeLoopBudget).
+const uint kRecordPending = 1u, kRecordHeavy = 2u, kRecordSafe = 4u;
+
+// Saves a path that has not taken its next step, its random state, its global sample index and
+// what the lane keeps for it. Everything is stored as bits (uvec4): small integers as floats
+// would be denormals, which lavapipe flushes to zero.
+void saveRecord(uint lane, PathState p, Rng rng, uint g, float rays, uint flags) {
     RecordRef r = recordOf(lane);
     r.v[0] = uvec4(floatBitsToUint(p.origin), floatBitsToUint(p.pdfPrev));
     r.v[1] = uvec4(floatBitsToUint(p.dir), p.vertex);
@@ -166,7 +175,7 @@ void saveRecord(uint lane, PathState p, Rng rng, uint g, float rays, bool heavy)
     r.v[4] = uvec4(floatBitsToUint(p.result.correction), (p.specularPrev ? 1u : 0u) | (p.fromSurface ? 2u : 0u));
     r.v[5] = uvec4(floatBitsToUint(p.lastVertex), p.medium);
     r.v[6] = uvec4(p.mediumScatters, rng.state, rng.inc, g);
-    r.v[7] = uvec4(floatBitsToUint(gFilterWeight), floatBitsToUint(rays), 0u, heavy ? 2u : 1u);
+    r.v[7] = uvec4(floatBitsToUint(gFilterWeight), floatBitsToUint(rays), 0u, kRecordPending | flags);
     atomicAdd(loopStats().u[kLoopStatCarried], 1u);
 }
 
@@ -175,7 +184,7 @@ void saveRecord(uint lane, PathState p, Rng rng, uint g, float rays, bool heavy)
 bool takeRecord(uint lane, inout PathState p, inout Rng rng, inout uint g, inout float rays) {
     RecordRef r = recordOf(lane);
     uvec4 v7 = r.v[7];
-    if (v7.w == 0u) return false;
+    if ((v7.w & kRecordPending) == 0u) return false;
     r.v[7] = uvec4(0u);
     gFilterWeight = uintBitsToFloat(v7.x);
     rays = uintBitsToFloat(v7.y);
@@ -201,18 +210,12 @@ bool takeRecord(uint lane, inout PathState p, inout Rng rng, inout uint g, inout
     return true;
 }
 
-// Whether lavapipe's loop cap was reached in this invocation: once it is, every loop ends after
-// one iteration, so a loop of two (whose length the compiler cannot know) runs once.
-bool loopCapReached() {
-    uint two = 2u + (pc.width >> 31u), n = 0u;
-    for (uint i = 0u; i < two; ++i) ++n;
-    return n != two;
-}
+#include "loop_cap.glsl"
 
 void main() {
     if (kLevelSchedule == kLevelScheduleQueued) {
         if (pc.sampleCount != 0u) queuedMain(LevelPmf(kPmfType, kPmfR, kPmfAlpha));
-        if (loopCapReached()) atomicAdd(loopStats().u[kLoopStatCapHits], 1u);
+        if (loopCapReached(2u + (pc.width >> 31u))) atomicAdd(loopStats().u[kLoopStatCapHits], 1u);
         return;
     }
     uvec2 pixel = gl_GlobalInvocationID.xy;
@@ -227,16 +230,26 @@ void main() {
     Rng rng;
     PathState path;
     float rays = 0.0;
-    bool resumed = false;
+    bool resumed = false, alone = false, safe = false;
     if (kLoopBudget != 0u) {
-        // A dispatch that only finishes carried paths (no new samples): in a group holding heavy
-        // records, the lowest lane holding one runs alone with kHeavyLoopBudget; the others keep
-        // their records for the next such dispatch.
         uint state = recordOf(pixelIndex).v[7].w;
-        uvec4 heavyLanes = subgroupBallot(state == 2u);
-        if (pc.sampleCount == 0u && heavyLanes != uvec4(0u)) {
-            if (state != 2u || gl_SubgroupInvocationID != subgroupBallotFindLSB(heavyLanes)) return;
-            gLoopBudget = kHeavyLoopBudget;
+        bool heavy = (state & kRecordHeavy) != 0u;
+        if (heavy) {
+            // Heavy records run only in dispatches that finish carried paths (no new samples: the
+            // record's samples come first, and such dispatches continue to the batch's end), the
+            // lowest lane of the group holding one alone; the others keep their records.
+            uvec4 heavyLanes = subgroupBallot(true);
+            if (pc.sampleCount != 0u || gl_SubgroupInvocationID != subgroupBallotFindLSB(heavyLanes)) return;
+        }
+        uvec4 heavyGroup = subgroupBallot(heavy);
+        if (!heavy && pc.sampleCount == 0u && heavyGroup != uvec4(0u)) return;  // wait for the heavy one
+        if (heavy) {
+            alone = true;
+            gLoopBudget = 1u;  // its heavy step, then it carries the path on
+        } else if ((state & kRecordSafe) != 0u) {
+            safe = true;
+            gLoopBudget = kSafeLoopBudget;
+            gLoopHardLimit = kSafeHardLimit;
         }
         if (state != 0u) resumed = takeRecord(pixelIndex, path, rng, g, rays);
     }
@@ -244,34 +257,41 @@ void main() {
         if (g >= end) return;
         path = startSample(pixel, pixelIndex, g, pmf, rng);
     }
+    // Where this dispatch's work for the lane starts: a retry begins here again.
+    PathState startPath = path;
+    Rng startRng = rng;
+    uint startG = g;
+    float startRays = rays, startFilterWeight = gFilterWeight;
+
     SampleSums sums = sampleSumsZero();
     // pmf pilot: its own sums (kPilot*), D_j and I(k) of the same paths, and the rays traced.
     vec3 pilotD = vec3(0.0), pilotD2 = vec3(0.0), pilotBase = vec3(0.0), pilotBase2 = vec3(0.0);
     float pilotRays = 0.0, pilotDropped = 0.0;
 
-    bool working = true;
+    bool working = true, carried = false, aborted = false, abortedFresh = false;
     while (working) {
+        // ---- Past the budget: carry the path, before its next step, to the next dispatch ----
+        if (kLoopBudget != 0u && gLoopTicks > gLoopBudget) {
+            carried = true;  // saved after the loop (stores inside it cost the loop registers)
+            break;
+        }
         if (kPilot) rays += 1.0;
-        // ---- One step, undone and carried to the next dispatch when it passed the budget ----
-        PathState before = path;
-        Rng rngBefore = rng;
         uint ticksBefore = gLoopTicks;
         LOOP_BUDGET_TICK(8u);  // this loop, and loops of the step entered with no lane active
         bool more = pathStep(path, pmf, rng);
         bool overlong = false;
-        if (kLoopBudget != 0u && gLoopTicks > gLoopBudget) {
-            if (ticksBefore != 0u || gLoopBudget < kHeavyLoopBudget) {
-                // Carried; heavy when the step passed the budget on its own
-                saveRecord(pixelIndex, before, rngBefore, g, kPilot ? rays - 1.0 : 0.0, ticksBefore == 0u);
-                working = false;
-                more = true;  // not finished: carried
-            } else {
-                // The step alone, running alone, passes kHeavyLoopBudget: the sample is dropped (as
-                // a non-finite one), counted, and reported as an error.
-                atomicAdd(loopStats().u[kLoopStatOverlong], 1u);
-                overlong = true;
-                more = false;
+        if (kLoopBudget != 0u && gLoopTicks > gLoopHardLimit) {
+            // A walk stopped at the hard limit: this step is garbage.
+            if (!alone) {
+                aborted = true;
+                abortedFresh = ticksBefore == 0u;  // the step alone passed the hard limit
+                break;
             }
+            // Running alone with most of the cap, the step still did not fit: the sample is
+            // dropped (as a non-finite one), counted, and reported as an error.
+            atomicAdd(loopStats().u[kLoopStatOverlong], 1u);
+            overlong = true;
+            more = false;
         }
         if (!more) {
             // ---- Path finished: accumulate, then start the next sample in the same lane ----
@@ -294,7 +314,19 @@ void main() {
             else path = startSample(pixel, pixelIndex, g, pmf, rng);
         }
     }
-    if (loopCapReached()) atomicAdd(loopStats().u[kLoopStatCapHits], 1u);
+    // ---- Lavapipe's cap reached, or a walk stopped: undo this dispatch's work of the lane ----
+    bool capped = loopCapReached(2u + (pc.width >> 31u));
+    if (kLoopBudget != 0u && (capped || aborted) && !alone && !(safe && capped)) {
+        // Retried from where it started: alone when one step did not fit (from the start of a
+        // dispatch, or at the safe budget), else with the safe budget.
+        gFilterWeight = startFilterWeight;
+        bool heavy = aborted && (abortedFresh || safe);
+        saveRecord(pixelIndex, startPath, startRng, startG, startRays, heavy ? kRecordHeavy : kRecordSafe);
+        atomicAdd(loopStats().u[kLoopStatRetried], 1u);
+        return;
+    }
+    if (carried) saveRecord(pixelIndex, path, rng, g, rays, safe ? kRecordSafe : 0u);
+    if (capped) atomicAdd(loopStats().u[kLoopStatCapHits], 1u);  // not recoverable: an error
     if (kPilot) {
         AccumRef pilot = AccumRef(uvec2(pc.pilotAddressLo, pc.pilotAddressHi));
         accumulateAdd(pilot, kPilotCorrection, pixelIndex, pixelCount, vec4(pilotD, pilotDropped));

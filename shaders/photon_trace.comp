@@ -81,7 +81,7 @@ void storePhoton(PhotonMapRef map, PhotonArrayRef photons, uint capacity, vec3 p
     photons.p[slot] = Photon(p, vertex, power, encodeDirection(wi));
 }
 
-void main() {
+void tracePhotonPath() {
     uint path = gl_GlobalInvocationID.y * pc.rowThreads + gl_GlobalInvocationID.x;
     if (path >= pc.pathCount || kLightCount == 0u) return;
     PhotonMapRef map = PhotonMapRef(uvec2(pc.headerLo, pc.headerHi));
@@ -125,4 +125,13 @@ void main() {
         power *= scale / q;
         origin = offsetRayOrigin(p, ng, dir);
     }
+}
+
+#include "loop_cap.glsl"
+
+void main() {
+    tracePhotonPath();
+    // lanes whose loops lavapipe's cap may have ended: the host reports them (an error)
+    if (loopCapReached(2u + (pc.pathCount >> 31u)))
+        atomicAdd(PhotonMapRef(uvec2(pc.headerLo, pc.headerHi)).h.loopCapHits, 1u);
 }

@@ -253,14 +253,15 @@ TEST_F(TungstenScenes, NonExponentialMatchesTungsten) {
     const BlockTable ref = readBlocks("tests/data/non-exponential_256x256_pt_4096spp_blocks16.txt");
     const char* scene = "scenes/tungsten/non-exponential/scene.json";
     const uint64_t spp = kNonExponentialSpp;
-    const Scene s = loadTestScene(scene, {{"camera.resolution", "[64,64]"}});
+    const Scene s = loadTestScene(scene, {{"camera.resolution", "[64,64]"}, {"renderer.adaptive_sampling", "false"}});
     Agreement a = agreement(renderFilm(s, spp, 1), s, ref, 256);
     print("non-exponential", a);
     EXPECT_LT(std::abs(a.signedMedian), kNonExponentialMedianBound);
     EXPECT_LT(a.p75, kNonExponentialP75Bound);
     EXPECT_LT(a.maxError, kNonExponentialMaxBound) << a.worst;
     EXPECT_LT(std::abs(a.imageError), kNonExponentialImageBound);
-    const Scene deeper = loadTestScene(scene, {{"camera.resolution", "[64,64]"}, {"integrator.max_bounces", "4"}});
+    const Scene deeper = loadTestScene(scene, {{"camera.resolution", "[64,64]"}, {"renderer.adaptive_sampling", "false"},
+                                               {"integrator.max_bounces", "4"}});
     Agreement control = agreement(renderFilm(deeper, spp, 2), deeper, ref, 256);
     print("control, one more bounce (the old counting)", control);
     EXPECT_TRUE(std::abs(control.signedMedian) > kNonExponentialMedianBound || control.p75 > kNonExponentialP75Bound ||

@@ -296,11 +296,12 @@ TEST_F(VdbRender, VoxelMediumSceneRendersWithAWrittenFireVdb) {
                                         "--vec3 Cd -10 0 -10 10 30 10 1.0 0.5 0.1",
                                         TELESCOPE_WRITE_VDB, (dir_ / "fire.vdb").string());
     ASSERT_EQ(std::system(cmd.c_str()), 0);
-    // Tungsten's file asks for its stratified sampler, which Telescope refuses (exit 2) rather than
-    // silently replacing: the override is what a user gives on the command line.
+    // Tungsten's file asks for its stratified sampler and adaptive sampling, which Telescope refuses
+    // (exit 2) rather than silently replacing: the overrides are what a user gives on the command line.
     const std::vector<SceneOverride> small = {{"primitives[1]", R"({"type":"point","power":0})"},
                                               {"camera.resolution", "[40,23]"},
-                                              {"renderer.stratified_sampler", "false"}};
+                                              {"renderer.stratified_sampler", "false"},
+                                              {"renderer.adaptive_sampling", "false"}};
     Scene scene = loadScene((dir_ / "scene.json").string(), small);
     std::vector<SceneOverride> dark = small;
     dark.push_back({"media[0].grid.emission_scale", "0"});

@@ -173,27 +173,30 @@ CONST uint kSpecLoopBudget = 26u;        // loop iterations a path_trace lane ma
 // Lavapipe (llvmpipe) keeps one loop counter per SIMD group and shader invocation: every
 // iteration of every loop, in any lane or in none (a loop under a branch no lane took still runs
 // once), counts, and at 65535 every loop of the invocation ends, without a word. path_trace
-// therefore counts the loop iterations of each lane (gLoopTicks) and stops a lane whose count
-// passes kSpecLoopBudget after the step of its path that passed it: the step is undone (the
-// path state and random state from before it are kept) and the lane's path is carried to the
-// next dispatch in a continuation record; the host dispatches again until no record is left.
-// The budget is kLoopBudgetLanes-fold below the cap, since 8 lanes of a group may each spend it
-// in turn, with half of it left for the loops every step enters with no lane active. A probe
-// after the work (loopCapReached in path_trace_main.glsl) sees whether the cap was reached
-// anyway and counts it (kLoopStatCapHits): then the result is wrong, and render says so.
+// therefore counts the loop iterations of each lane (gLoopTicks): a lane past its budget starts no
+// new step but carries its path to the next dispatch in a continuation record (the host
+// dispatches again until no record is left); the long walks of media stop at a hard limit. A
+// probe after the work (loop_cap.glsl) sees whether the cap was reached anyway (the counts of
+// BVH walks are estimates): then the lane undoes its dispatch (nothing is accumulated) and
+// retries it from where it started at the safe budget, a quarter of the cap per group; a walk that stopped
+// at the hard limit is retried alone (heavy). Only a cap reached at the safe budget, or a step too
+// long to run even alone, is an error, counted and reported.
 CONST uint kLavapipeLoopCap = 65535u;
 CONST uint kLoopBudgetLanes = 8u;  // lavapipe's SIMD width for 32-bit lanes (256-bit llvmpipe)
-CONST uint kDefaultLoopBudget = kLavapipeLoopCap / kLoopBudgetLanes / 2u;  // 4095
-// A step that passes the budget on its own, at the start of a dispatch (a comb of 8192 points, a
-// long tracking walk), is carried as heavy: in the dispatches that finish carried paths, a group
-// holding heavy records runs only one of them, alone, with this budget; the others wait.
+CONST uint kDefaultLoopBudget = 16384u;  // per lane and dispatch; lanes of a group mostly walk together
+CONST uint kRayLoopTicks = 32u;          // a BVH walk counts as this many iterations (intersect.h)
+CONST uint kSafeLoopBudget = 2048u;  // 8 lanes x 2048: a quarter of the cap, room for walks 3x their estimate
+CONST uint kSafeHardLimit = kLavapipeLoopCap / kLoopBudgetLanes;        // 8191
+// A heavy step (a walk past the hard limit) runs alone in a dispatch that finishes carried paths:
+// the lowest lane of its group holding one, the others waiting, with most of the cap.
 CONST uint kHeavyLoopBudget = kLavapipeLoopCap / 8u * 7u;  // 57337
 // The loop statistics buffer (by device address, uint counters, cumulative over a render):
-CONST uint kLoopStatCapHits = 0u;   // lanes whose invocation reached lavapipe's cap (an error)
-CONST uint kLoopStatCarried = 1u;   // paths carried to a later dispatch (continuation records written)
-CONST uint kLoopStatResumed = 2u;   // continuation records resumed
-CONST uint kLoopStatOverlong = 3u;  // samples dropped: one step of the path alone passed the budget (an error)
-CONST uint kLoopStatCount = 4u;
+CONST uint kLoopStatCapHits = 0u;   // lanes that reached lavapipe's cap at the safe budget or alone (an error)
+CONST uint kLoopStatCarried = 1u;   // continuation records written
+CONST uint kLoopStatResumed = 2u;   // continuation records taken up
+CONST uint kLoopStatOverlong = 3u;  // samples dropped: one step did not fit the cap even alone (an error)
+CONST uint kLoopStatRetried = 4u;   // lane dispatches undone and retried (the cap or a hard limit reached)
+CONST uint kLoopStatCount = 5u;
 // A continuation record: kContinuationVec4s vec4 per lane (path_trace_main.glsl saveRecord).
 CONST uint kContinuationVec4s = 8u;
 
@@ -348,7 +351,7 @@ struct PhotonMapHeader {
     uint photonsLo; uint photonsHi; uint sortedLo; uint sortedHi;  // photons as stored, and in bucket order
     uint cellCountLo; uint cellCountHi; uint cellStartLo; uint cellStartHi;
     uint pad1; uint pad2; uint pad3; uint pad4;
-    uint storedCount; uint maxBucket; uint pad5; uint pad6;  // written by atomics: a cache line of their own
+    uint storedCount; uint maxBucket; uint loopCapHits; uint pad6;  // written by atomics: a cache line of their own
     uint pad7; uint pad8; uint pad9; uint pad10;
     uint pad11; uint pad12; uint pad13; uint pad14;
     uint pad15; uint pad16; uint pad17; uint pad18;

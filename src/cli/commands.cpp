@@ -208,6 +208,7 @@ void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Cont
     j["loop_budget"] = {{"cap_hits", stats.loops.capHits},
                         {"carried_paths", stats.loops.carried},
                         {"resumed_paths", stats.loops.resumed},
+                        {"retried_lanes", stats.loops.retried},
                         {"dropped_overlong", stats.loops.overlong},
                         {"drain_dispatches", stats.loops.drainDispatches}};
     j["validation_messages"] = context.validationMessageCount();

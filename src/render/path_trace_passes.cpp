@@ -289,6 +289,7 @@ public:
         out.capHits = s[shader::kLoopStatCapHits];
         out.carried = s[shader::kLoopStatCarried];
         out.resumed = s[shader::kLoopStatResumed];
+        out.retried = s[shader::kLoopStatRetried];
         out.overlong = s[shader::kLoopStatOverlong];
         out.drainDispatches = drainDispatches_;
         return out;

@@ -126,6 +126,12 @@ uint64_t PhotonMap::storedCount() const {
     return h.storedCount;
 }
 
+uint32_t PhotonMap::loopCapHits() const {
+    shader::PhotonMapHeader h{};
+    header_.download(&h, sizeof(h));
+    return h.loopCapHits;
+}
+
 uint32_t PhotonMap::maxBucket() const {
     shader::PhotonMapHeader h{};
     header_.download(&h, sizeof(h));

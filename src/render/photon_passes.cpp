@@ -273,6 +273,7 @@ public:
     bool batchComplete(std::vector<gpu::DispatchTiming>& /*extra*/) override {
         const uint64_t stored = map_.storedCount();
         const uint32_t fullest = map_.maxBucket();
+        loopCapHits_ += map_.loopCapHits();  // photon_trace and gather of this pass (the header is per pass)
         lastStored_ = stored;
         const uint32_t slicesNeeded = PhotonMap::slicesFor(fullest, integrator_.photon.gatherCount);
         if (stored > map_.capacity() || slicesNeeded > slices_) {
@@ -288,6 +289,11 @@ public:
     }
 
     uint64_t photonPathsLastBatch() const override { return tracePush_.pathCount; }
+    LoopStats loopStats() const override {
+        LoopStats s;
+        s.capHits = loopCapHits_;
+        return s;
+    }
     uint64_t photonsStoredLastBatch() const override { return lastStored_; }
     uint64_t deviceBytes() const override { return map_.deviceBytes() + blockBuffer_.size(); }
 
@@ -357,6 +363,7 @@ private:
     shader::PhotonTracePush tracePush_{};
     shader::GatherPush gatherPush_{};
     uint64_t lastStored_ = 0;
+    uint64_t loopCapHits_ = 0;  // lanes of photon_trace and gather that reached lavapipe's loop cap (an error)
     uint32_t passInBlock_ = 0;
     uint32_t slices_ = 1;
 };

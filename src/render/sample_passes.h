@@ -91,6 +91,7 @@ struct LoopStats {
     uint64_t capHits = 0;   // lanes whose invocation reached lavapipe's loop cap: wrong results (an error)
     uint64_t carried = 0;   // paths carried to a later dispatch by the loop budget
     uint64_t resumed = 0;   // carried paths taken up again (equals carried after every batch)
+    uint64_t retried = 0;   // lane dispatches undone and retried after reaching the cap or a walk's hard limit
     uint64_t overlong = 0;  // samples dropped because one step of their path passed the budget (an error)
     uint64_t drainDispatches = 0;  // dispatches that only finished carried paths
 };

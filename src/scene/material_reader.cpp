@@ -26,6 +26,9 @@ void SceneReader::readBsdfs(const json& list) {
 
 Material SceneReader::readBsdf(const json& v, const std::string& key) {
     const std::string type = requiredType(v, key);
+    // Tungsten's bump maps perturb the shading normal: they change the image, and Telescope has none.
+    if (const json* bump = find(v, "bump"); bump && !bump->is_null())
+        fail(member(key, "bump"), "bump maps are not supported: remove the key to render without it");
 
     Material m;
     if (type == "lambert") m.type = BsdfType::Lambert;

@@ -79,9 +79,6 @@ std::string ignoredKeyReason(const std::string& key) {
         {"integrator.volume_photon_count", "volume photons: photon mapping scenes have no media (refused)"},
         {"integrator.volume_gather_radius", "volume photons: photon mapping scenes have no media (refused)"},
         {"integrator.fixed_volume_radius", "volume photons: photon mapping scenes have no media (refused)"},
-        {"renderer.adaptive_sampling",
-         "NOT HONOURED (true): Tungsten's adaptive sampling spends more samples on noisy pixels (the mean stays, "
-         "the noise changes); Telescope samples every pixel equally"},
     };
     for (const auto& [name, why] : kReasons)
         if (key == name) return why;

@@ -127,8 +127,13 @@ void SceneReader::ignore(const std::string& key) {
 }
 
 void SceneReader::ignoreUnread(const json& obj, const std::string& key, const std::vector<std::string_view>& read) {
+    // Read everywhere they can appear: a bsdf's "bump" (null; any map is refused by readBsdf) and
+    // a primitive's "cone_angle" (90; other angles are refused by readPrimitive).
+    static const std::vector<std::string_view> readEverywhere = {"bump", "cone_angle"};
     for (const auto& [name, value] : obj.items())
-        if (std::find(read.begin(), read.end(), name) == read.end()) ignore(member(key, name));
+        if (std::find(read.begin(), read.end(), name) == read.end() &&
+            std::find(readEverywhere.begin(), readEverywhere.end(), name) == readEverywhere.end())
+            ignore(member(key, name));
 }
 
 void SceneReader::rejectUnknownKeys(const json& obj, const std::string& key,

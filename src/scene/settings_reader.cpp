@@ -362,13 +362,14 @@ void SceneReader::readRenderer(const json& v) {
                  fmt::format("only \"0\" (none) is supported in the scene; give the limit on the command line "
                              "with {}", std::string(name) == "timeout" ? "--time SECONDS" : "--checkpoint-every SECONDS"));
     }
-    // adaptive_sampling false is what Telescope renders; true stays listed as not honoured (refusing it
-    // would stop Tungsten's non-exponential scene from loading unmodified): ignoredKeyReason.
-    std::vector<std::string_view> read = {"spp", "stratified_sampler", "enable_resume_render", "timeout",
-                                          "checkpoint_interval"};
-    if (const json* a = find(v, "adaptive_sampling"); a && !boolean(*a, "renderer.adaptive_sampling"))
-        read.push_back("adaptive_sampling");
-    ignoreUnread(v, "renderer", read);
+    // Tungsten's adaptive sampling gives noisy pixels more samples, chosen from those pixels' own
+    // samples: a data-dependent sample count biases a pixel's mean (heavy-tailed corrections most),
+    // which an unbiased renderer must not do silently.
+    onlyBoolean(v, "renderer", "adaptive_sampling", false,
+                "Telescope gives every pixel the same number of samples (sample counts chosen from a pixel's own "
+                "samples would bias its mean); --set renderer.adaptive_sampling=false renders the scene without it");
+    ignoreUnread(v, "renderer", {"spp", "stratified_sampler", "enable_resume_render", "timeout", "checkpoint_interval",
+                                 "adaptive_sampling"});
 }
 
 void SceneReader::readTransmittanceEstimator(const json& v, const std::string& key) {

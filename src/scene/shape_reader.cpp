@@ -51,6 +51,12 @@ void SceneReader::readPrimitive(const json& v, const std::string& key) {
     const bool known = isOneOf({"quad", "cube", "sphere", "disk", "mesh", "point", "infinite_sphere", "infinite_sphere_cap"}, type);
     if (!known && isOneOf(kUnsupportedPrimitives, type)) fail(typeKey, fmt::format("unsupported primitive type '{}'", type));
     if (!known) fail(typeKey, fmt::format("unknown primitive type '{}'", type));
+    // Tungsten narrows a disk's emission to a cone of this half-angle; Telescope's disks emit over
+    // the hemisphere, Tungsten's default (90 degrees), the one value honoured.
+    if (const json* cone = find(v, "cone_angle")) {
+        if (number(*cone, member(key, "cone_angle")) != 90.0)
+            fail(member(key, "cone_angle"), "only 90 (the whole hemisphere, Tungsten's default) is supported");
+    }
 
     Shape shape{"", type};
     if (const json* name = find(v, "name")) shape.name = string(*name, member(key, "name"));
