@@ -208,8 +208,8 @@ public:
                     deviceSceneSpec(context, plan.pathTraceSpec), kPathTraceUniformBindings) {
         pipeline_.bindBuffers({b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims,
                                b.textures, b.environment, b.materials, b.lights, b.media, b.shadingNormals});
-        for (const auto& s : deviceSceneSpec(context, plan.pathTraceSpec))
-            if (s.id == shader::kSpecLoopBudget) loopBudget_ = s.value;
+        for (const auto& s : plan.pathTraceSpec)
+            if (s.id == shader::kSpecLoopBudget && s.value != 0) loopBudget_ = deviceLoopBudget(context);
         const Camera& cam = scene.camera;
         setPushCamera(push_, cam);
         push_.width = cam.width;
@@ -268,7 +268,8 @@ public:
     // takes every carried path at least one step further), so that the film holds every sample
     // the batch counted.
     bool batchComplete(std::vector<gpu::DispatchTiming>& extra) override {
-        std::array<uint32_t, shader::kLoopStatCount> s = readLoopStats();
+        std::array<uint32_t, shader::kLoopStatCount>& s = lastLoopStats_;
+        s = readLoopStats();
         shader::PathTracePush drain = push_;
         drain.sampleBase += drain.sampleCount;  // the end of the batch's samples: no new ones
         drain.sampleCount = 0;
@@ -283,8 +284,9 @@ public:
         return true;
     }
 
+    // As read by the last batchComplete (no second read per batch).
     LoopStats loopStats() const override {
-        const std::array<uint32_t, shader::kLoopStatCount> s = readLoopStats();
+        const std::array<uint32_t, shader::kLoopStatCount>& s = lastLoopStats_;
         LoopStats out;
         out.capHits = s[shader::kLoopStatCapHits];
         out.carried = s[shader::kLoopStatCarried];
@@ -376,6 +378,7 @@ private:
     }
 
     gpu::Buffer loopStats_;  // kLoopStat* counters
+    std::array<uint32_t, shader::kLoopStatCount> lastLoopStats_{};
     gpu::Buffer records_;    // continuation records (a loop budget only)
     std::unique_ptr<gpu::CommandBatch> drain_;
     uint32_t loopBudget_ = 0;

@@ -126,10 +126,10 @@ uint64_t PhotonMap::storedCount() const {
     return h.storedCount;
 }
 
-uint32_t PhotonMap::loopCapHits() const {
+shader::PhotonMapHeader PhotonMap::header() const {
     shader::PhotonMapHeader h{};
     header_.download(&h, sizeof(h));
-    return h.loopCapHits;
+    return h;
 }
 
 uint32_t PhotonMap::maxBucket() const {

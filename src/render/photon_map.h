@@ -48,8 +48,9 @@ public:
     uint64_t storedCount() const;
     // Photons in the fullest bucket of the last build (the scan records it).
     uint32_t maxBucket() const;
-    // Lanes of this pass's photon_trace and gather that reached lavapipe's loop cap (gpu_types.h).
-    uint32_t loopCapHits() const;
+    // The whole header of this pass in one read (storedCount, maxBucket, loopCapHits: the lanes of
+    // photon_trace and gather that reached lavapipe's loop cap, gpu_types.h).
+    shader::PhotonMapHeader header() const;
     // Gather slices (dispatches of kGatherSlicePhotons photons per bucket) for a bucket this full.
     // (gatherCount: a k-nearest gather's k, whose slices are smaller; 0 for every photon within r.)
     static uint32_t slicesFor(uint32_t photonsInBucket, uint32_t gatherCount = 0);

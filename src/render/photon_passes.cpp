@@ -271,9 +271,10 @@ public:
     }
 
     bool batchComplete(std::vector<gpu::DispatchTiming>& /*extra*/) override {
-        const uint64_t stored = map_.storedCount();
-        const uint32_t fullest = map_.maxBucket();
-        loopCapHits_ += map_.loopCapHits();  // photon_trace and gather of this pass (the header is per pass)
+        const shader::PhotonMapHeader header = map_.header();  // one read for the three counts
+        const uint64_t stored = header.storedCount;
+        const uint32_t fullest = header.maxBucket;
+        loopCapHits_ += header.loopCapHits;  // photon_trace and gather of this pass (the header is per pass)
         lastStored_ = stored;
         const uint32_t slicesNeeded = PhotonMap::slicesFor(fullest, integrator_.photon.gatherCount);
         if (stored > map_.capacity() || slicesNeeded > slices_) {

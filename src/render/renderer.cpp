@@ -144,17 +144,13 @@ void Renderer::render(const RenderRequest& request) {
             batchSamples += passes_->recordUnit(*batch_, sampleIndex_ + batchSamples, samples);
         }
         auto batchStart = Clock::now();
-        auto timings = batch_->submitAndWait();
+        // The batch's dispatches, then those batchComplete runs itself (carried paths finished).
+        std::vector<gpu::DispatchTiming> timings = batch_->submitAndWait();
         double batchSeconds = secondsSince(batchStart);
         if (stats_.firstSampleSeconds == 0.0) stats_.firstSampleSeconds = secondsSinceProcessStart();
         ++stats_.submits;
+        const bool complete = passes_->batchComplete(timings);
         for (const auto& t : timings) {
-            stats_.passes[t.name].dispatches++;
-            stats_.passes[t.name].gpuMs += t.gpuMs;
-        }
-        std::vector<gpu::DispatchTiming> extra;
-        const bool complete = passes_->batchComplete(extra);
-        for (const auto& t : extra) {
             stats_.passes[t.name].dispatches++;
             stats_.passes[t.name].gpuMs += t.gpuMs;
         }

@@ -111,8 +111,8 @@ public:
     // stopped by time finishes it first.
     virtual bool sampleInProgress() const { return false; }
     // After the batch ran: false when it must be recorded and run again. Dispatches it ran itself
-    // (paths carried past the batch's last dispatch, finished) add their timings to `extra`.
-    virtual bool batchComplete(std::vector<gpu::DispatchTiming>& extra) { (void)extra; return true; }
+    // (paths carried past the batch's last dispatch, finished) append their timings to `timings`.
+    virtual bool batchComplete(std::vector<gpu::DispatchTiming>& timings) { (void)timings; return true; }
     // path_trace's loop statistics so far (shared/gpu_types.h kLoopStat*); zero for other passes.
     virtual LoopStats loopStats() const { return {}; }
     // Photon mapping: photon paths traced and photons stored by the last complete batch.
