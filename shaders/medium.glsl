@@ -20,6 +20,8 @@ layout(constant_id = kSpecTrLevel) const uint kTrLevel = 1u;
 layout(constant_id = kSpecTrPmfType) const uint kTrPmfType = 0u;
 layout(constant_id = kSpecTrPmfR) const float kTrPmfR = 0.65;
 layout(constant_id = kSpecTrPmfAlpha) const float kTrPmfAlpha = 0.6666667;
+layout(constant_id = kSpecTrTaylorTerms) const uint kTrTaylorTerms = 1u;
+layout(constant_id = kSpecTrTaylorPoints) const uint kTrTaylorPoints = 0u;
 layout(constant_id = kSpecCameraMedium) const uint kCameraMedium = 0u;
 layout(constant_id = kSpecHasGrids) const bool kHasGrids = false;
 layout(constant_id = kSpecTrModel) const uint kSceneTrModel = 0xffffffffu;
@@ -151,7 +153,8 @@ TrSegment mediumSegment(uint mi, vec3 o, vec3 d, float l) {
 }
 
 TrEstimator sceneTrEstimator() {
-    return TrEstimator(kTrEstimatorType, kTrLevel, LevelPmf(kTrPmfType, kTrPmfR, kTrPmfAlpha));
+    return TrEstimator(kTrEstimatorType, kTrLevel, LevelPmf(kTrPmfType, kTrPmfR, kTrPmfAlpha), kTrTaylorTerms,
+                       kTrTaylorPoints);
 }
 
 // ---- Trackers through the majorant grid ----
@@ -231,14 +234,14 @@ vec3 trTrackGrid(uint mode, TrSegment s, inout Rng rng, inout uint lookups) {
 }
 
 // Estimated transmittance of medium mi over [0, l] with the form of the endpoint types.
-// Homogeneous media with a comb estimator (ray marching, debiased or unbiased ray marching): every
+// Homogeneous media with a comb estimator (ray marching, debiased or unbiased ray marching, taylor): every
 // comb of a constant density sees the exact optical depth, so every comb estimator returns
 // g(sigma_t density l) exactly (debiased marching: the correction is exactly 0); it is returned
 // without marching. Besides the work, marching would only add rounding: at a kink or step of g
 // (linear, pulse) the sub-comb depths can round to opposite sides, and the correction divides
 // that difference by p(j). The trackers stay stochastic (what the scene asked for).
 const bool kCombEstimator = kTrEstimatorType == kTrEstRayMarch || kTrEstimatorType == kTrEstDebiasedRayMarch ||
-                            kTrEstimatorType == kTrEstUnbiasedRayMarch;
+                            kTrEstimatorType == kTrEstUnbiasedRayMarch || kTrEstimatorType == kTrEstTaylor;
 const bool kCombExactEverywhere = kCombEstimator && !kHasInhomogeneous;
 const bool kGridTracking = kHasGrids && (kTrEstimatorType == kTrEstDeltaTracking || kTrEstimatorType == kTrEstRatioTracking ||
                                           kTrEstimatorType == kTrEstResidualRatioTracking);

@@ -23,7 +23,7 @@ void main() {
     s.densityMin = pc.densityMin;
     s.densityMax = pc.densityMax;
     s.medium = 0u; s.pad0 = 0u; s.pad1 = 0u; s.pad2 = 0u;
-    TrEstimator e = TrEstimator(pc.estimator, pc.level, LevelPmf(kPmfGeometric, pc.pmfR, 0.0));
+    TrEstimator e = TrEstimator(pc.estimator, pc.level, LevelPmf(kPmfGeometric, pc.pmfR, 0.0), pc.terms, 0u);
     vec4 sums = vec4(0.0);
     for (uint i = 0u; i < pc.samplesPerThread; ++i) {
         Rng rng = rngCreate(id, i, pc.seed);

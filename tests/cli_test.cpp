@@ -424,9 +424,9 @@ TEST_F(Cli, StudyTransmittanceWritesCsvHeatMapsAndSummary) {
     EXPECT_NE(header.find("work_x_rel_mse"), std::string::npos) << header;
     size_t rows = 0;
     for (std::string line; std::getline(csv, line);) ++rows;
-    EXPECT_EQ(rows, 2u * 300 + 4u * 150) << "two ray marchers on both models, four exponential-only estimators";
+    EXPECT_EQ(rows, 3u * 600 + 4u * 150) << "two ray marchers and taylor on all four models, four exponential-only estimators";
     EXPECT_TRUE(fs::exists(dir + "/summary.md"));
     for (const char* e : {"ray_march", "debiased_ray_march", "delta_tracking", "ratio_tracking", "residual_ratio_tracking",
-                          "unbiased_ray_march"})
+                          "unbiased_ray_march", "taylor"})
         EXPECT_TRUE(fs::exists(dir + "/heat_" + std::string(e) + ".png")) << e << " (gnuplot-nox installed?)";
 }

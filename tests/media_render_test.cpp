@@ -118,6 +118,20 @@ Scene cloudScene(const std::string& estimator) {
 
 }  // namespace
 
+TEST_F(MediaRender, TaylorMatchesTheSlabAndTheDebiasedDavisCloud) {
+    // The slab against its closed form (exponential and Davis), as every unbiased estimator above.
+    expectMatchesClosedForm(exponentialModel(), R"({"type":"taylor"})", 64, 41);
+    expectMatchesClosedForm(davisModel(), R"({"type":"taylor"})", 64, 42);
+    // The Davis cloud (grid density, multiple scattering): taylor against debiased marching, two
+    // independent unbiased renders, per 4x4 block (their difference's own standard error).
+    const auto debiased = blockMeans(renderFilm(cloudScene(R"({"type":"debiased_ray_march","level":1})"), 512, 43), 4);
+    Film film = renderFilm(cloudScene(R"({"type":"taylor"})"), 512, 44);
+    const auto regions = blockMeans(film, 4);
+    const ZSummary z = compareRegions(regions, debiased, sidakThreshold(kAlpha, regions.size() * 3));
+    EXPECT_EQ(z.failing, 0u) << z.worst << " (" << z.tests << " tests)";
+    EXPECT_EQ(film.nonFiniteSamples(), 0u);
+}
+
 TEST_F(MediaRender, DavisCloudDebiasedAgreesWithHighLevelMarchingAndLowLevelDoesNot) {
     // Reference: biased marching at a very high level, 2^6 points per segment. The debiased
     // estimator runs at base level k = 0 here: at 1024 spp on this cloud the bias of 2-point

@@ -605,7 +605,7 @@ TEST_F(Stability, PhotonsOnlyBehindTheSurface) {
 const char* const kAllTransmittanceEstimators[] = {
     R"({"type":"ray_march","level":2})", R"({"type":"debiased_ray_march","level":1})",
     R"({"type":"delta_tracking"})",       R"({"type":"ratio_tracking"})",
-    R"({"type":"residual_ratio_tracking"})", R"({"type":"unbiased_ray_march","level":2})"};
+    R"({"type":"residual_ratio_tracking"})", R"({"type":"unbiased_ray_march","level":2})", R"({"type":"taylor"})"};
 
 Film renderSlab(const std::string& estimator, double constantDensity, double falloffDensity,
                 const std::string& model = R"({"type":"exponential"})", uint64_t spp = 4) {

@@ -89,7 +89,8 @@ CONST uint kTrEstDeltaTracking = 2u;
 CONST uint kTrEstRatioTracking = 3u;
 CONST uint kTrEstResidualRatioTracking = 4u;
 CONST uint kTrEstUnbiasedRayMarch = 5u;      // Kettunen et al. 2021
-CONST uint kTrEstCount = 6u;
+CONST uint kTrEstTaylor = 6u;                // Taylor series around a comb pivot (Misso et al. 2022)
+CONST uint kTrEstCount = 7u;
 
 // ---- Level pmfs (PmfType; "auto" is resolved on the host before any pass sees it) ----
 CONST uint kPmfGeometric = 0u;

@@ -213,6 +213,8 @@ CONST uint kSpecTrModel = 40u;           // the transmittance model every medium
 CONST uint kSpecHasInhomogeneousMedia = 41u;  // a medium whose density varies (exponential or grid)
 CONST uint kSpecBruteForcePrims = 42u;   // n > 0: rays test the scene's n primitives in turn, no BVH
 CONST uint kMaxBruteForcePrims = 20u;     // the largest scene traced that way (break-even ~24: docs/BENCHMARKS.md)
+CONST uint kSpecTrTaylorTerms = 43u;     // taylor: terms evaluated before the roulette
+CONST uint kSpecTrTaylorPoints = 44u;    // taylor: points of each factor's comb (0: from the density bounds)
 
 CONST uint kPathTraceGroupSize = 8u;  // 8x8 pixel tiles
 

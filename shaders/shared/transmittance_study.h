@@ -18,7 +18,7 @@ struct TrStudyPush {
     DensityProfile profile;
     uint estimator; uint level; float pmfR; uint seed;
     float densityMin; float densityMax; uint threads; uint samplesPerThread;
-    uint outputOffset; uint pad0; uint pad1; uint pad2;
+    uint outputOffset; uint terms; uint pad1; uint pad2;
 };
 
 SHADER_NAMESPACE_END

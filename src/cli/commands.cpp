@@ -27,6 +27,7 @@
 #include "render/pmf_pilot.h"
 #include "study/reference.h"
 #include "study/transmittance_study.h"
+#include "shared/transmittance_estimators.h"
 
 namespace fs = std::filesystem;
 
@@ -413,10 +414,13 @@ int runStudyTransmittance(const CommonOptions& common, const StudyTransmittanceC
     if (!fs::is_directory(parent))
         throw InputError("", "-o", fmt::format("directory '{}' does not exist", parent.string()));
     if (c.level > 16) throw InputError("", "--level", "the level must be at most 16");
+    if (c.terms > shader::kTrTaylorMaxTerms)
+        throw InputError("", "--taylor-terms", fmt::format("at most {} terms", shader::kTrTaylorMaxTerms));
     TransmittanceStudyOptions o;
     o.outDir = c.outDir;
     o.samples = c.samples;
     o.level = c.level;
+    o.taylorTerms = c.terms;
     o.seed = c.seed;
     if (!common.quiet) o.log = [](const std::string& line) { fmt::print(stderr, "study: {}\n", line); };
     gpu::Context context(contextOptions(common));

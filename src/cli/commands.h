@@ -67,6 +67,7 @@ struct StudyTransmittanceCli {
     std::string outDir;
     uint32_t samples = 16384;
     uint32_t level = 1;
+    uint32_t terms = 1;  // taylor's forced terms, as in TransmittanceEstimatorSettings
     uint32_t seed = 1;
 };
 

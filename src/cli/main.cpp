@@ -151,7 +151,9 @@ int main(int argc, char** argv) {
     studyTr->add_option("-o,--output", studyOptions.outDir, "Output directory")->required();
     studyTr->add_option("--samples", studyOptions.samples, "Estimates per estimator and problem (default 16384)")
         ->check(CLI::PositiveNumber);
-    studyTr->add_option("--level", studyOptions.level, "Ray-marching level k (2^k points) and debiased base (default 1)");
+    studyTr->add_option("--level", studyOptions.level,
+                        "Ray-marching level k (2^k points), debiased base and taylor pivot (default 1)");
+    studyTr->add_option("--taylor-terms", studyOptions.terms, "Terms taylor always evaluates before its roulette");
     studyTr->add_option("--seed", studyOptions.seed, "Random seed");
 
     // ---- view: the interactive front end (src/viewer) ----

@@ -40,6 +40,10 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         if (t.type == TransmittanceEstimatorType::RayMarch) how += fmt::format(" (2^{} points, biased)", t.level);
         if (t.type == TransmittanceEstimatorType::DebiasedRayMarch)
             how += fmt::format(" (base level {}, {})", t.level, pmfDescription(t.pmf));
+        if (t.type == TransmittanceEstimatorType::Taylor)
+            how += fmt::format(" (pivot of at least 2^{} points, factors of {}, {} forced term{}, then the recipe's "
+                               "roulette)", t.level, t.points ? fmt::format("{} points", t.points) : "points from the density bounds",
+                               t.terms, t.terms == 1 ? "" : "s");
         plan.passes[0].why += fmt::format("; volumetric path tracing through {} medi{} (single and multiple scattering, "
                                           "next-event estimation), every transmittance by {}",
                                           f.mediumCount, f.mediumCount == 1 ? "um" : "a", how);
@@ -170,6 +174,8 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecTrPmfType, uint32_t(in.transmittance.pmf.type)},
         {kSpecTrPmfR, gpu::specFloat(in.transmittance.pmf.r)},
         {kSpecTrPmfAlpha, gpu::specFloat(in.transmittance.pmf.alpha)},
+        {kSpecTrTaylorTerms, in.transmittance.terms},
+        {kSpecTrTaylorPoints, in.transmittance.points},
         {kSpecCameraMedium, uint32_t(scene.camera.medium + 1)},
         {kSpecHasGrids, f.grids},
         {kSpecHasInhomogeneousMedia, f.inhomogeneous},

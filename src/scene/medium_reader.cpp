@@ -11,6 +11,7 @@
 #include "scene/transform.h"
 #include "scene/vdb_file.h"
 #include "shared/transmittance.h"
+#include "shared/transmittance_estimators.h"
 
 namespace telescope::scene_reader {
 
@@ -390,15 +391,28 @@ void SceneReader::checkEstimatorFitsMedia(const json& doc) const {
                                                                                      : "progressive_photon_map"));
     const TransmittanceEstimatorType t = scene_.integrator.transmittance.type;
     if (t == TransmittanceEstimatorType::RayMarch || t == TransmittanceEstimatorType::DebiasedRayMarch) return;
-    for (size_t i = 0; i < scene_.media.size(); ++i)
-        if (!scene_.media[i].transmittance.exponential()) {
-            const std::string where = scene_.media[i].name.empty() ? fmt::format("medium {}", i)
-                                                                     : fmt::format("medium '{}'", scene_.media[i].name);
-            fail(find(doc, "integrator") ? "integrator.transmittance_estimator.type" : "media",
-                 fmt::format("{} works for exponential media only, but {} has the '{}' transmittance "
-                             "(use ray_march or debiased_ray_march)",
-                             transmittanceEstimatorName(t), where, scene_.media[i].transmittance.name));
+    const std::string key = find(doc, "integrator") ? "integrator.transmittance_estimator.type" : "media";
+    for (size_t i = 0; i < scene_.media.size(); ++i) {
+        const TransmittanceModel& m = scene_.media[i].transmittance;
+        const std::string where = scene_.media[i].name.empty() ? fmt::format("medium {}", i)
+                                                                 : fmt::format("medium '{}'", scene_.media[i].name);
+        if (t == TransmittanceEstimatorType::Taylor) {
+            // A power series in the optical depth around the pivot (shared/transmittance_estimators.h).
+            const bool fits = m.type == shader::kTrInterpolated
+                                  ? shader::trTaylorSimpleSupported(m.typeA) && shader::trTaylorSimpleSupported(m.typeB)
+                                  : shader::trTaylorSimpleSupported(m.type);
+            if (!fits)
+                fail(key, fmt::format("taylor needs a transmittance that is a power series in the optical depth "
+                                      "(exponential, double_exponential, erlang, davis, or an interpolation of them), "
+                                      "but {} has the '{}' transmittance (linear, quadratic and pulse have kinks or "
+                                      "steps, davis_weinstein a branch point at zero depth; use debiased_ray_march)",
+                                      where, m.name));
+        } else if (!m.exponential()) {
+            fail(key, fmt::format("{} works for exponential media only, but {} has the '{}' transmittance "
+                                  "(use ray_march, debiased_ray_march or taylor)",
+                                  transmittanceEstimatorName(t), where, m.name));
         }
+    }
 }
 
 }  // namespace telescope::scene_reader

@@ -161,7 +161,8 @@ struct Medium {
 enum class TransmittanceEstimatorType : uint32_t {
     RayMarch = shader::kTrEstRayMarch, DebiasedRayMarch = shader::kTrEstDebiasedRayMarch,
     DeltaTracking = shader::kTrEstDeltaTracking, RatioTracking = shader::kTrEstRatioTracking,
-    ResidualRatioTracking = shader::kTrEstResidualRatioTracking, UnbiasedRayMarch = shader::kTrEstUnbiasedRayMarch
+    ResidualRatioTracking = shader::kTrEstResidualRatioTracking, UnbiasedRayMarch = shader::kTrEstUnbiasedRayMarch,
+    Taylor = shader::kTrEstTaylor
 };
 const char* transmittanceEstimatorName(TransmittanceEstimatorType t);
 
@@ -268,8 +269,10 @@ struct PhotonSettings {
 // "transmittance_estimator": {"type": ..., "level": k, "pmf": {...}} (docs/MEDIA.md).
 struct TransmittanceEstimatorSettings {
     TransmittanceEstimatorType type = TransmittanceEstimatorType::DebiasedRayMarch;
-    uint32_t level = 1;  // ray marching: 2^k points; debiased: the base level k
+    uint32_t level = 1;  // ray marching: 2^k points; debiased: the base level k; taylor: the pivot's 2^k points
     PmfSettings pmf = defaultTransmittancePmf();  // debiased: geometric or power law (levels above k)
+    uint32_t terms = 1;   // taylor: terms always evaluated before the roulette
+    uint32_t points = 0;  // taylor: points of each factor's comb; 0 = from the segment's density bounds
 };
 
 

@@ -70,6 +70,7 @@ const char* transmittanceEstimatorName(TransmittanceEstimatorType t) {
         case TransmittanceEstimatorType::RatioTracking: return "ratio_tracking";
         case TransmittanceEstimatorType::ResidualRatioTracking: return "residual_ratio_tracking";
         case TransmittanceEstimatorType::UnbiasedRayMarch: return "unbiased_ray_march";
+        case TransmittanceEstimatorType::Taylor: return "taylor";
     }
     return "?";
 }
@@ -122,13 +123,17 @@ void from_json(const json& j, DebiasSettings& d) {
 void to_json(json& j, const TransmittanceEstimatorSettings& t) {
     j = {{"type", transmittanceEstimatorName(t.type)}, {"level", t.level}};
     if (t.type == TransmittanceEstimatorType::DebiasedRayMarch) j["pmf"] = t.pmf;
+    if (t.type == TransmittanceEstimatorType::Taylor) {
+        j["terms"] = t.terms;
+        j["points"] = t.points;
+    }
 }
 
 void from_json(const json& j, TransmittanceEstimatorSettings& t) {
     if (j.contains("type")) {
         const std::string name = j.at("type").get<std::string>();
         bool found = false;
-        for (uint32_t i = 0; i <= uint32_t(TransmittanceEstimatorType::UnbiasedRayMarch); ++i)
+        for (uint32_t i = 0; i < shader::kTrEstCount; ++i)
             if (name == transmittanceEstimatorName(TransmittanceEstimatorType(i))) {
                 t.type = TransmittanceEstimatorType(i);
                 found = true;
@@ -136,6 +141,8 @@ void from_json(const json& j, TransmittanceEstimatorSettings& t) {
         if (!found) throw std::invalid_argument(fmt::format("'type': unknown transmittance estimator '{}'", name));
     }
     readValue(j, "level", t.level);
+    readValue(j, "terms", t.terms);
+    readValue(j, "points", t.points);
     if (j.contains("pmf")) from_json(j.at("pmf"), t.pmf);
 }
 

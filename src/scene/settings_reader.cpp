@@ -6,6 +6,7 @@
 
 #include "scene/photon_levels.h"
 #include "shared/gpu_types.h"
+#include "shared/transmittance_estimators.h"
 #include "scene/transform.h"
 
 namespace telescope {
@@ -374,21 +375,30 @@ void SceneReader::readRenderer(const json& v) {
 
 void SceneReader::readTransmittanceEstimator(const json& v, const std::string& key) {
     expectObject(v, key);
-    rejectUnknownKeys(v, key, {"type", "level", "pmf"});
+    rejectUnknownKeys(v, key, {"type", "level", "pmf", "terms", "points"});
     TransmittanceEstimatorSettings& t = scene_.integrator.transmittance;
     const std::string typeKey = member(key, "type");
     if (!find(v, "type")) fail(typeKey, "missing");
     const std::string type = string(v["type"], typeKey);
     bool found = false;
-    for (uint32_t i = 0; i <= uint32_t(TransmittanceEstimatorType::UnbiasedRayMarch); ++i)
+    for (uint32_t i = 0; i < shader::kTrEstCount; ++i)
         if (type == transmittanceEstimatorName(TransmittanceEstimatorType(i))) {
             t.type = TransmittanceEstimatorType(i);
             found = true;
         }
     if (!found)
         fail(typeKey, fmt::format("unknown transmittance estimator '{}' (expected ray_march, debiased_ray_march, "
-                                  "delta_tracking, ratio_tracking, residual_ratio_tracking or unbiased_ray_march)", type));
+                                  "delta_tracking, ratio_tracking, residual_ratio_tracking, unbiased_ray_march or taylor)",
+                                  type));
     if (const json* l = find(v, "level")) t.level = integer(*l, member(key, "level"), 0, 16);
+    if (const json* n = find(v, "terms")) {
+        if (t.type != TransmittanceEstimatorType::Taylor) fail(member(key, "terms"), "only the 'taylor' estimator has terms");
+        t.terms = integer(*n, member(key, "terms"), 0, int(shader::kTrTaylorMaxTerms));
+    }
+    if (const json* n = find(v, "points")) {
+        if (t.type != TransmittanceEstimatorType::Taylor) fail(member(key, "points"), "only the 'taylor' estimator has points");
+        t.points = integer(*n, member(key, "points"), 0, int(shader::kTrTaylorMaxPoints));
+    }
     if (const json* pmf = find(v, "pmf")) t.pmf = readPmf(*pmf, member(key, "pmf"), t.pmf, false);
 }
 

@@ -28,7 +28,18 @@ constexpr double kLooseness[] = {1.0, 1.25, 1.5, 1.75, 2.0};
 // One estimate per thread: lavapipe ends a loop after 65535 iterations per SIMD group, so a
 // thread must not accumulate the lookups of many estimates.
 constexpr uint32_t kSamplesPerThread = 1;
-constexpr double kDavisAlpha = 1.5625;  // c = 0.8 (Misso et al.)
+
+// The models: exponential, and Davis at three values of c (C^2 = c^2 = 1/alpha; c = 0.8 as in
+// Misso et al.): a light, the paper's and a heavy tail.
+struct ModelSpec {
+    std::string name;
+    double davisAlpha;  // 0: exponential
+};
+const std::vector<ModelSpec>& models() {
+    static const std::vector<ModelSpec> list = {
+        {"exponential", 0.0}, {"davis", 1.0 / (0.8 * 0.8)}, {"davis_c0.4", 1.0 / (0.4 * 0.4)}, {"davis_c1.6", 1.0 / (1.6 * 1.6)}};
+    return list;
+}
 
 struct Problem {
     std::string model, profile;
@@ -52,14 +63,15 @@ const std::vector<EstimatorSpec>& estimators() {
         {"ratio_tracking", shader::kTrEstRatioTracking, true},
         {"residual_ratio_tracking", shader::kTrEstResidualRatioTracking, true},
         {"unbiased_ray_march", shader::kTrEstUnbiasedRayMarch, true},
+        {"taylor", shader::kTrEstTaylor, false},
     };
     return list;
 }
 
 // The optical depth at which the model's T_ss equals the target.
-double depthFor(const std::string& model, double target) {
-    if (model == "exponential") return -std::log(target);
-    return kDavisAlpha * (std::pow(target, -1.0 / kDavisAlpha) - 1.0);  // (1 + tau/a)^-a = T
+double depthFor(const ModelSpec& model, double target) {
+    if (model.davisAlpha == 0.0) return -std::log(target);
+    return model.davisAlpha * (std::pow(target, -1.0 / model.davisAlpha) - 1.0);  // (1 + tau/a)^-a = T
 }
 
 std::vector<Problem> problems() {
@@ -69,9 +81,10 @@ std::vector<Problem> problems() {
         {"sine", shader::makeProfile(shader::kProfileSine, 1.0f, 0.9f, 2.3f)},
         {"gaussian", shader::makeProfile(shader::kProfileGaussian, 1.0f, 0.45f, 0.12f)},
     };
-    for (const std::string model : {"exponential", "davis"}) {
-        shader::TrModel m = model == "exponential" ? shader::trSimple(shader::kTrExponential, glm::vec4(0.0f))
-                                                   : shader::trSimple(shader::kTrDavis, glm::vec4(float(kDavisAlpha), 0, 0, 0));
+    for (const ModelSpec& model : models()) {
+        shader::TrModel m = model.davisAlpha == 0.0
+                                ? shader::trSimple(shader::kTrExponential, glm::vec4(0.0f))
+                                : shader::trSimple(shader::kTrDavis, glm::vec4(float(model.davisAlpha), 0, 0, 0));
         for (const auto& [name, unit] : shapes)
             for (double target : kTargets)
                 for (double looseness : kLooseness) {
@@ -79,7 +92,7 @@ std::vector<Problem> problems() {
                     shader::DensityProfile p = unit;
                     p.a = float(tau / shader::profileIntegral(unit, 0.0, 1.0));
                     const glm::vec2 bounds = shader::profileBounds(p, 0.0f, 1.0f);
-                    Problem pr{model, name, m, p, target, looseness,
+                    Problem pr{model.name, name, m, p, target, looseness,
                                shader::trForm(m, shader::kFormSurfaceSurface, float(tau)), bounds.x,
                                float(bounds.y * looseness)};
                     out.push_back(pr);
@@ -127,6 +140,7 @@ TransmittanceStudyReport runTransmittanceStudy(gpu::Context& context, const Tran
             push.estimator = job.estimator->type;
             push.level = o.level;
             push.pmfR = o.pmfR;
+            push.terms = o.taylorTerms;
             push.seed = o.seed * 7919u + uint32_t(first + i);
             push.densityMin = job.problem->densityMin;
             push.densityMax = job.problem->densityMax;
@@ -186,7 +200,8 @@ TransmittanceStudyReport runTransmittanceStudy(gpu::Context& context, const Tran
     for (const EstimatorSpec& e : estimators()) {
         std::string data;
         std::vector<std::string> panels;
-        for (const std::string model : {"exponential", "davis"}) {
+        for (const ModelSpec& spec : models()) {
+            const std::string& model = spec.name;
             if (e.exponentialOnly && model != "exponential") continue;
             for (const std::string profile : {"constant", "sine", "gaussian"}) {
                 panels.push_back(model + " / " + profile);
@@ -212,7 +227,7 @@ TransmittanceStudyReport runTransmittanceStudy(gpu::Context& context, const Tran
             "set xtics ({}) rotate by 45 right\nset ytics ({})\nset xlabel 'target transmittance'\n"
             "set ylabel 'majorant looseness'\nset cbrange [-8:2]\nset palette defined (0 '#000080', 1 '#2080ff', 2 '#40ffb0', 3 '#ffff40', 4 '#ff4020')\n"
             "set xrange [-0.5:{}]\nset yrange [-0.5:{}]\n",
-            1500, panels.size() > 3 ? 900 : 480, e.name, panels.size() / 3, e.name, o.level, xtics, ytics,
+            1500, 60 + 420 * (panels.size() / 3), e.name, panels.size() / 3, e.name, o.level, xtics, ytics,
             std::size(kTargets) - 0.5, std::size(kLooseness) - 0.5);
         for (size_t i = 0; i < panels.size(); ++i)
             gp += fmt::format("set title '{}'\nplot '{}' index {} using 1:2:3 with image notitle\n", panels[i], dat, i);
@@ -232,16 +247,18 @@ TransmittanceStudyReport runTransmittanceStudy(gpu::Context& context, const Tran
     // ---- Summary: geometric mean of work x relative MSE per estimator and model ----
     std::string md = fmt::format(
         "# Transmittance study\n\n{} estimates per (estimator, problem); level {} for ray marching (2^k points) and "
-        "the base of debiased marching (geometric pmf, r = {}). Problems: density constant / sine / Gaussian on a "
-        "unit segment, target transmittance {} values in [0.01, 0.99], majorant looseness 1 to 2; exponential and "
-        "Davis (c = 0.8) transmittance. Work = density lookups per estimate; MSE per estimate against the closed "
-        "form (variance + bias^2).\n\n"
+        "the base of debiased marching (geometric pmf, r = {}), the pivot of taylor (forced terms: {}). Problems: "
+        "density constant / sine / Gaussian on a unit segment, target transmittance {} values in [0.01, 0.99], "
+        "majorant looseness 1 to 2; exponential and Davis transmittance (`davis`: c = 0.8 as in Misso et al.; "
+        "`davis_c0.4`, `davis_c1.6`: c = 0.4 and 1.6, alpha = 1/c^2). Work = density lookups per estimate; MSE per "
+        "estimate against the closed form (variance + bias^2).\n\n"
         "| estimator | model | geometric mean of work x MSE / T^2 | mean lookups | largest |bias| / T | best on |\n"
         "|---|---|---|---|---|---|\n",
-        uint64_t(samples), o.level, o.pmfR, std::size(kTargets));
+        uint64_t(samples), o.level, o.pmfR, o.taylorTerms, std::size(kTargets));
     std::map<std::string, int> bestCount;
     std::map<std::string, int> problemsPerModel;
-    for (const std::string model : {"exponential", "davis"}) {
+    for (const ModelSpec& spec : models()) {
+        const std::string& model = spec.name;
         // Best estimator per problem (lowest work x MSE).
         std::map<std::string, std::pair<double, std::string>> best;
         for (const auto& r : report.rows) {

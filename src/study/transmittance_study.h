@@ -1,7 +1,7 @@
 // `telescope study transmittance`: the paper's canonical 1-D study (Misso et al. 2022, section 4;
 // docs/ESTIMATORS.md section 4). Every transmittance estimator runs on the device over a grid of 1-D
 // problems (density profile constant / sine / Gaussian, target transmittance 0.01 to 0.99,
-// majorant looseness 1 to 2, exponential and Davis transmittance) and the work x MSE of each is
+// majorant looseness 1 to 2, exponential and Davis transmittance at three tails) and the work x MSE of each is
 // written as a CSV, one heat-map PNG per estimator (gnuplot) and a summary table.
 #pragma once
 
@@ -19,6 +19,7 @@ struct TransmittanceStudyOptions {
     uint32_t samples = 16384;   // estimates per problem and estimator
     uint32_t level = 1;         // base level of ray marching (2^k points) and debiased marching
     float pmfR = 0.65f;         // geometric pmf of debiased marching
+    uint32_t taylorTerms = 1;   // taylor: terms before the roulette (TransmittanceEstimatorSettings::terms)
     uint32_t seed = 1;
     std::function<void(const std::string&)> log;
 };
