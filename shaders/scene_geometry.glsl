@@ -13,16 +13,22 @@ layout(std140, binding = kBindingPrimsUniform) uniform PrimUniform { Prim unifor
 // and never frees it, as long as the folding removes half of the shader. photon_trace's unrolled
 // brute-force loop reads every primitive at a constant offset, so it was compiled again in every
 // pass: about 1.2 MB of memory and 10 ms per pass on the point-light plane
-// (docs/BENCHMARKS.photon-notes.md). With SCENE_UNIFORM_INDEX_HIDDEN the index gets a zero the
-// compiler cannot see (gl_NumWorkGroups.z is at least 1), so no offset is constant; the loads stay
-// uniform-buffer loads. The path tracer keeps constant offsets: lavapipe tries its inlining once
-// and drops it (too little of the shader goes), and the hidden zero cost it 1.4% of its paths/s.
-// Stability.RepeatedPassesDoNotGrowTheProcess checks both.
+// (docs/BENCHMARKS.photon-notes.md). The path tracer's brute-force loop did the same on scenes of
+// a few primitives (the furnace's one sphere: a new shader every dispatch, LeakSanitizer's
+// "indirect leaks" in registerEHFrames of the Stability tests; docs/TESTING.md "Sanitizers").
+// With the hidden zero the index gets a zero the compiler cannot see (gl_NumWorkGroups.z is at
+// least 1), so no offset is constant; the loads stay uniform-buffer loads. BVH walks read nodes at
+// data-dependent offsets: they keep the plain index in the path tracer (the hidden zero cost it
+// 1.4% of its paths/s). Stability.RepeatedPassesDoNotGrowTheProcess checks both.
+layout(constant_id = kSpecBruteForcePrims) const uint kBruteForcePrims = 0u;
+uint uniformIndex(uint i) {
 #ifdef SCENE_UNIFORM_INDEX_HIDDEN
-uint uniformIndex(uint i) { return i + uint(gl_NumWorkGroups.z == 0u); }
+    return i + uint(gl_NumWorkGroups.z == 0u);
 #else
-uint uniformIndex(uint i) { return i; }
+    if (kBruteForcePrims > 0u) return i + uint(gl_NumWorkGroups.z == 0u);
+    return i;
 #endif
+}
 
 // (Functions, not ?: : the uniform and storage structs are distinct SPIR-V types.)
 BvhNode sceneNode(uint i) {
@@ -35,6 +41,5 @@ Prim scenePrim(uint i) {
 }
 #define BVH_NODE(i) sceneNode(i)
 #define BVH_PRIM(i) scenePrim(i)
-layout(constant_id = kSpecBruteForcePrims) const uint kBruteForcePrims = 0u;
 #define BVH_BRUTE_FORCE_PRIMS kBruteForcePrims
 #include "shared/intersect.h"
