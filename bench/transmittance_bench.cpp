@@ -30,6 +30,7 @@ const std::map<std::string, std::string> kEstimators = {
     {"ratio_tracking", R"({"type":"ratio_tracking"})"},
     {"residual_ratio_tracking", R"({"type":"residual_ratio_tracking"})"},
     {"unbiased_ray_march", R"({"type":"unbiased_ray_march"})"},
+    {"taylor", R"({"type":"taylor"})"},
 };
 
 // Closed form of scenes/absorbing-slab.json per pixel (see tests/media_render_test.cpp).
@@ -199,7 +200,8 @@ void lookupsPerSecond(benchmark::State& state, uint32_t type) {
     glm::vec2 b = profileBounds(s.profile, 0.0f, 1.0f);
     s.densityMin = b.x;
     s.densityMax = b.y;
-    TrEstimator e{type, 1, LevelPmf{kPmfGeometric, 0.65f, 0.0f}};
+    const TransmittanceEstimatorSettings defaults;
+    TrEstimator e{type, 1, LevelPmf{kPmfGeometric, 0.65f, 0.0f}, defaults.terms, defaults.points};
     TrModel m = trSimple(kTrExponential, glm::vec4(0.0f));
     uint32_t lookups = 0, i = 0;
     float sink = 0.0f;
@@ -270,11 +272,13 @@ RENDER_BENCH(slab, delta_tracking);
 RENDER_BENCH(slab, ratio_tracking);
 RENDER_BENCH(slab, residual_ratio_tracking);
 RENDER_BENCH(slab, unbiased_ray_march);
+RENDER_BENCH(slab, taylor);
 RENDER_BENCH(smoke, debiased_ray_march);
 RENDER_BENCH(smoke, delta_tracking);
 RENDER_BENCH(smoke, ratio_tracking);
 RENDER_BENCH(smoke, residual_ratio_tracking);
 RENDER_BENCH(smoke, unbiased_ray_march);
+RENDER_BENCH(smoke, taylor);
 
 #define MAJORANT_BENCH(kind, absorbing, extinction, est, cell)                                           \
     BENCHMARK_CAPTURE(majorantEfficiency, kind##_##est##_cell##cell, #est, cell, absorbing, extinction)  \
@@ -299,6 +303,7 @@ BENCHMARK_CAPTURE(lookupsPerSecond, delta_tracking, shader::kTrEstDeltaTracking)
 BENCHMARK_CAPTURE(lookupsPerSecond, ratio_tracking, shader::kTrEstRatioTracking);
 BENCHMARK_CAPTURE(lookupsPerSecond, residual_ratio_tracking, shader::kTrEstResidualRatioTracking);
 BENCHMARK_CAPTURE(lookupsPerSecond, unbiased_ray_march, shader::kTrEstUnbiasedRayMarch);
+BENCHMARK_CAPTURE(lookupsPerSecond, taylor, shader::kTrEstTaylor);
 BENCHMARK(debiasedMseSlope)->Iterations(1)->Unit(benchmark::kSecond);
 
 // ---- Markdown tables of the results ----
