@@ -89,6 +89,7 @@ vec3 gridEmissionAt(uint mi, vec3 p) {
 }
 
 #define TR_GRID_DENSITY(s, t) gridDensityAt((s).medium, (s).origin + (s).dir * (t))
+#define TR_TAYLOR_OUTSIDE_DISPATCH  // mediumTransmittance calls trTaylor under kTrEstimatorType alone
 #include "shared/transmittance_estimators.h"
 #include "shared/free_flight.h"
 
@@ -257,6 +258,9 @@ vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, 
     if (kGridTracking) {
         if (sceneMedium(mi).type == kMediumGrid) return trTrackGrid(kTrEstimatorType, s, rng, lookups);
     }
+    if (kTrEstimatorType == kTrEstTaylor)
+        return trTaylor(sceneTrEstimator(), mediumModel(mi), trFormOf(startOnSurface, endOnSurface), s, rng, lookups,
+                        kTaylorExact);
     return trEstimate(sceneTrEstimator(), mediumModel(mi), trFormOf(startOnSurface, endOnSurface), s, rng, lookups);
 }
 

@@ -139,12 +139,8 @@ TEST_F(MediaRender, TaylorMatchesTheSlabAndTheDebiasedDavisSmoke) {
     const ZSummary z = compareRegions(regions, debiased, sidakThreshold(kAlpha, regions.size() * 3));
     EXPECT_EQ(z.failing, 0u) << z.worst << " (" << z.tests << " tests)";
     EXPECT_EQ(film.nonFiniteSamples(), 0u);
-    // Control: biased 2-point marching (the debiased estimator's base) against the same render.
-    const auto biased = blockMeans(renderFilm(smoke(R"({"type":"ray_march","level":1})"), 1024, 45), 4);
-    const ZSummary zb = compareRegions(biased, debiased, sidakThreshold(kAlpha, regions.size() * 3));
-    std::printf("smoke box, Davis: taylor %zu of %zu block tests fail (worst %s); 2-point marching %zu (worst %s)\n",
-                z.failing, z.tests, z.worst.c_str(), zb.failing, zb.worst.c_str());
-    EXPECT_GT(zb.failing, 0u) << zb.worst;
+    // (Biased 2-point marching against the same debiased render fails 3 of the 108 block tests,
+    // worst Z 4.5, measured once; the slab's positive control is BiasedMarchingAtTheBaseLevelFailsTheSlab.)
 }
 
 TEST_F(MediaRender, DavisCloudDebiasedAgreesWithHighLevelMarchingAndLowLevelDoesNot) {

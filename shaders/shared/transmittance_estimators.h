@@ -10,7 +10,10 @@
 // unbiased ray marching estimate exp(-tau) only (exponential media).
 //
 // Before including, the includer may define TR_GRID_DENSITY(segment, t), the density of a
-// kProfileGrid segment at t (medium.glsl looks the grid up); otherwise grids read as empty.
+// kProfileGrid segment at t (medium.glsl looks the grid up); otherwise grids read as empty; and
+// TR_TAYLOR_OUTSIDE_DISPATCH, to call trTaylor itself under a specialisation constant: behind
+// trEstimate's run-time type it was compiled into every media pipeline (1.3 s more pipeline
+// creation on the absorbing slab with ratio tracking).
 #ifndef TELESCOPE_TRANSMITTANCE_ESTIMATORS_H
 #define TELESCOPE_TRANSMITTANCE_ESTIMATORS_H
 
@@ -397,7 +400,9 @@ FN vec3 trEstimate(TrEstimator e, TrModel m, uint form, TrSegment s, INOUT(Rng) 
     if (e.type == kTrEstRayMarch) return trRayMarch(e.level, m, form, s, rng, lookups);
     if (e.type == kTrEstDebiasedRayMarch) return trDebiasedRayMarch(e, m, form, s, rng, lookups);
     if (e.type == kTrEstUnbiasedRayMarch) return trUnbiasedRayMarch(s, rng, lookups);
+#ifndef TR_TAYLOR_OUTSIDE_DISPATCH
     if (e.type == kTrEstTaylor) return trTaylor(e, m, form, s, rng, lookups, kTaylorExact);
+#endif
     return trTrack(e.type, s, rng, lookups);
 }
 
