@@ -28,6 +28,7 @@ uint gLoopHardLimit = kHeavyLoopBudget;
 
 layout(constant_id = kSpecMaxBounces) const uint kMaxBounces = 64u;
 layout(constant_id = kSpecMinBounces) const uint kMinBounces = 0u;
+layout(constant_id = kSpecRoulette) const bool kRoulette = true;
 layout(constant_id = kSpecDebiasMode) const uint kDebiasMode = 0u;
 layout(constant_id = kSpecPmfType) const uint kPmfType = 0u;
 layout(constant_id = kSpecPmfR) const float kPmfR = 0.65;

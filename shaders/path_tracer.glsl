@@ -356,8 +356,9 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
 
     // Russian roulette from the second bounce on: survive with probability max(throughput)
     // (pbrt's rule; Tungsten waits until the throughput is below 0.1). It changes the noise,
-    // not the expectation, of every level.
-    if (v > 1u) {
+    // not the expectation, of every level. Derivative renders turn it off (kRoulette): its survival
+    // decisions depend on the throughput, so they would differ between the parameter's values.
+    if (kRoulette && v > 1u) {
         float q = maxComponent(abs(s.throughput));
         if (q < 1.0) {
             if (rngNext(rng) >= q) return false;

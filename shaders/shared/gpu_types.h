@@ -215,6 +215,7 @@ CONST uint kSpecBruteForcePrims = 42u;   // n > 0: rays test the scene's n primi
 CONST uint kMaxBruteForcePrims = 20u;     // the largest scene traced that way (break-even ~24: docs/BENCHMARKS.md)
 CONST uint kSpecTrTaylorTerms = 43u;     // taylor: terms evaluated before the roulette
 CONST uint kSpecTrTaylorPoints = 44u;    // taylor: points of each factor's comb (0: from the density bounds)
+CONST uint kSpecRoulette = 45u;          // Russian roulette on path throughput (off in derivative renders)
 
 CONST uint kPathTraceGroupSize = 8u;  // 8x8 pixel tiles
 

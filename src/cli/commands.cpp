@@ -18,6 +18,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "gpu/context.h"
+#include "render/derivative.h"
 #include "render/film_io.h"
 #include "render/image_output.h"
 #include "render/renderer.h"
@@ -42,6 +43,48 @@ Scene loadWithOverrides(const CommonOptions& o) {
 }
 
 }  // namespace
+
+// ---- Derivative renders (render/derivative.h) ----
+
+DerivativeSettings derivativeSettings(const DerivativeCli& d) {
+    DerivativeSettings s;
+    s.key = d.key;
+    s.step = d.step;
+    s.estimator = parseDerivativeEstimator(d.estimator, "--derivative-estimator");
+    s.levels = d.levels;
+    if (!d.pmf.empty()) {
+        nlohmann::json j;
+        try {
+            j = nlohmann::json::parse(d.pmf);
+        } catch (const nlohmann::json::exception&) {
+            throw InputError("", "--derivative-pmf", fmt::format("'{}' is not JSON", d.pmf));
+        }
+        const std::string type = j.is_object() && j.contains("type") && j["type"].is_string() ? j["type"].get<std::string>() : "";
+        auto number = [&](const char* name) {
+            if (!j.contains(name) || !j[name].is_number())
+                throw InputError("", "--derivative-pmf", fmt::format("a {} pmf needs a number \"{}\"", type, name));
+            const double v = j[name].get<double>();
+            if (!(v > 0.0 && v < 1.0))
+                throw InputError("", "--derivative-pmf", fmt::format("\"{}\" must lie in (0, 1), not {}", name, v));
+            return float(v);
+        };
+        for (const auto& [k, v] : j.items())
+            if (k != "type" && k != "r" && k != "alpha")
+                throw InputError("", "--derivative-pmf", fmt::format("unknown key \"{}\"", k));
+        if (type == "geometric") {
+            s.pmf.type = PmfType::Geometric;
+            s.pmf.r = number("r");
+        } else if (type == "power_law") {
+            s.pmf.type = PmfType::PowerLaw;
+            s.pmf.alpha = number("alpha");
+        } else {
+            throw InputError("", "--derivative-pmf", "expected {\"type\": \"geometric\", \"r\": R} or "
+                                                     "{\"type\": \"power_law\", \"alpha\": A}");
+        }
+        s.pmf.origin = "given (--derivative-pmf)";
+    }
+    return s;
+}
 
 // ---- Shared with the viewer (cli/outputs.h) ----
 
@@ -146,6 +189,7 @@ void writeImages(const ImageOutputOptions& o, const Film& film, const OutputInfo
         {"telescope:device", info.device},
         {"telescope:non_finite_samples", std::to_string(film.nonFiniteSamples())},
     };
+    for (const auto& e : info.extra) meta.entries.push_back(e);
     if (!info.shards.empty()) {
         std::string seeds;
         for (uint32_t seed : info.seeds) seeds += (seeds.empty() ? "" : ",") + std::to_string(seed);
@@ -221,10 +265,75 @@ void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Cont
 
 }  // namespace
 
+namespace {
+
+// `render --derivative KEY`: a derivative image (render/derivative.h).
+int runDerivativeRender(const CommonOptions& common, const RenderOptions& o, Scene& scene) {
+    InterruptGuard interrupts;
+    const DerivativeSettings settings = derivativeSettings(o.derivative);
+    if (!o.resumePath.empty() || !o.output.checkpointPath.empty() || o.checkpointEvery > 0)
+        throw InputError("", "--derivative", "derivative renders cannot be checkpointed or resumed yet");
+    ImageOutputOptions output = o.output;
+    checkImageOutputs(output);
+    if (!o.statsPath.empty()) checkOutputPath(o.statsPath, "--stats-json", ".json");
+    if (scene.integrator.debias.estimator != DebiasEstimator::None && scene.integrator.debias.pmf.type == PmfType::Auto)
+        throw InputError(scene.path, "integrator.debias.pmf.type",
+                         "a derivative render needs a fixed pmf: put the one the pilot of a radiance render chose in the scene");
+    reportIgnoredKeys(scene, common.quiet);
+    gpu::Context context(contextOptions(common));
+    DerivativeRenderer renderer(context, scene, settings, o.seed);
+    if (!common.quiet) fmt::print(stderr, "{}", renderer.planText());
+    RenderRequest request;
+    request.timeLimit = o.timeLimit;
+    request.spp = o.timeLimit > 0 ? 0 : (o.spp ? o.spp : scene.renderer.spp);
+    ProgressReporter progress(common.quiet, "derivative");
+    request.progress = [&](const RenderProgress& p) { progress(p); };
+    request.stop = [] { return InterruptGuard::requested(); };
+    renderer.render(request);
+    progress.finish();
+    checkValidation(context);
+    warnLoopStats(renderer.renderer().stats());
+    if (InterruptGuard::requested()) {
+        fmt::print(stderr, "telescope: interrupted: nothing written\n");
+        return 130;
+    }
+    const Film& film = renderer.film();
+    OutputInfo info{scene.path, scene.document.dump(), renderer.description(), context.info().name,
+                    resolvedSettings(scene).dump(), o.seed, renderer.seconds()};
+    const DerivativeParameter& p = renderer.parameter();
+    info.extra = {{"telescope:derivative_key", p.key},
+                  {"telescope:derivative_value", fmt::format("{:.17g}", p.value)},
+                  {"telescope:derivative_step", fmt::format("{:.17g}", p.step)},
+                  {"telescope:derivative_estimator", derivativeEstimatorName(settings.estimator)}};
+    writeImages(output, film, info);
+    if (!o.statsPath.empty()) {
+        nlohmann::json j;
+        j["scene"] = scene.path;
+        j["device"] = context.info().name;
+        j["seed"] = o.seed;
+        j["spp"] = film.samplesPerPixel();
+        j["wall_seconds"] = renderer.seconds();
+        j["version_seconds"] = renderer.versionSeconds();
+        j["evaluations"] = renderer.evaluations();
+        j["estimator"] = renderer.description();
+        j["non_finite_samples"] = film.nonFiniteSamples();
+        j["derivative"] = {{"key", p.key}, {"value", p.value}, {"step", p.step}};
+        writeTextAtomically(o.statsPath, j.dump(2) + "\n");
+    }
+    if (!common.quiet)
+        fmt::print(stderr, "wrote {} (d/d {}: {}x{}, {} spp, {} evaluations, {:.2f} s on {})\n", output.exrPath, p.key,
+                   film.width(), film.height(), film.samplesPerPixel(), renderer.evaluations(), renderer.seconds(),
+                   context.info().name);
+    return 0;
+}
+
+}  // namespace
+
 int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
     RenderOptions o = optionsIn;
-    InterruptGuard interrupts;
     Scene scene = loadWithOverrides(common);
+    if (!o.derivative.key.empty()) return runDerivativeRender(common, o, scene);
+    InterruptGuard interrupts;
     if (o.output.checkpointPath.empty() && o.checkpointEvery > 0) o.output.checkpointPath = o.output.exrPath + ".checkpoint";
     checkImageOutputs(o.output);
     if (!o.statsPath.empty()) checkOutputPath(o.statsPath, "--stats-json", ".json");
@@ -431,8 +540,18 @@ int runStudyTransmittance(const CommonOptions& common, const StudyTransmittanceC
     return 0;
 }
 
-int runPlan(const CommonOptions& common) {
+int runPlan(const CommonOptions& common, const DerivativeCli& derivative) {
     Scene scene = loadWithOverrides(common);
+    if (!derivative.key.empty()) {
+        // The versions' checks need the device (the renderer's buffers): plan builds one.
+        const DerivativeSettings settings = derivativeSettings(derivative);
+        gpu::Context context(contextOptions(common));
+        DerivativeRenderer renderer(context, scene, settings, kDefaultSeed);
+        Scene base = scene;
+        base.integrator.russianRoulette = false;
+        fmt::print("{}{}", describePlan(base, renderer.renderer().plan()), renderer.planText());
+        return 0;
+    }
     GpuScene gpuScene = buildGpuScene(scene);
     fmt::print("{}", describePlan(scene, makeRenderPlan(scene, gpuScene.features)));
     return 0;

@@ -25,7 +25,17 @@ struct ImageOutputOptions {
     std::string checkpointPath;  // written at the end (and during long renders) when not empty
 };
 
+// --derivative KEY and its options (render, plan): render/derivative.h.
+struct DerivativeCli {
+    std::string key;             // empty: a radiance render
+    double step = 0.0;           // --step (0: default)
+    std::string estimator = "single_term";
+    uint32_t levels = 12;
+    std::string pmf;             // JSON text of a pmf ({"type": "geometric", "r": 0.5}); empty: default
+};
+
 struct RenderOptions {
+    DerivativeCli derivative;
     ImageOutputOptions output;
     uint64_t spp = 0;        // 0: the scene's renderer.spp
     double timeLimit = 0.0;  // seconds, instead of spp
@@ -76,7 +86,7 @@ int runStudyTransmittance(const CommonOptions& common, const StudyTransmittanceC
 int runReference(const CommonOptions& common, const ReferenceOptions& options);
 int runMerge(const MergeOptions& options);
 int runConverge(const CommonOptions& common, const ConvergeOptionsCli& options);
-int runPlan(const CommonOptions& common);
+int runPlan(const CommonOptions& common, const DerivativeCli& derivative = {});
 int runDevices();
 
 }  // namespace telescope::cli

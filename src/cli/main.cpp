@@ -64,6 +64,17 @@ int main(int argc, char** argv) {
     render->add_option("--stats-json", renderOptions.statsPath, "Write per-pass times, dispatch counts and device here");
     render->add_option("--resume", renderOptions.resumePath,
                        "Continue the render in this checkpoint (same scene and overrides), adding --spp or --time");
+    auto addDerivative = [](CLI::App* cmd, DerivativeCli& d) {
+        cmd->add_option("--derivative", d.key,
+                        "Render the derivative image with respect to this numeric scene value (a --set key path)");
+        cmd->add_option("--step", d.step, "The derivative's largest finite-difference step h_0 (default: |value| / 16)");
+        cmd->add_option("--derivative-estimator", d.estimator,
+                        "forward, central, single_term (default), sum or progressive");
+        cmd->add_option("--derivative-levels", d.levels, "Levels of the telescoping series (default 12: h down to h_0 / 4096)");
+        cmd->add_option("--derivative-pmf", d.pmf,
+                        "Level pmf, JSON: {\"type\": \"geometric\", \"r\": 0.5} (default) or power_law with alpha");
+    };
+    addDerivative(render, renderOptions.derivative);
     render->add_option("--checkpoint-every", renderOptions.checkpointEvery,
                        "Also write the checkpoint every SECONDS while rendering (default file: OUT.exr.checkpoint)")
         ->check(CLI::PositiveNumber);
@@ -179,6 +190,8 @@ int main(int argc, char** argv) {
     // ---- plan, devices ----
     auto* plan = app.add_subcommand("plan", "Print the passes a render of the scene would run, and why");
     addCommon(plan);
+    DerivativeCli planDerivative;
+    addDerivative(plan, planDerivative);
     app.add_subcommand("devices", "List Vulkan devices");
 
     try {
@@ -201,7 +214,7 @@ int main(int argc, char** argv) {
         if (shardRender->parsed()) return runShardRender(common, shardRenderOptions);
         if (shardMerge->parsed()) return runShardMerge(shardMergeOptions);
         if (converge->parsed()) return runConverge(common, convergeOptions);
-        if (plan->parsed()) return runPlan(common);
+        if (plan->parsed()) return runPlan(common, planDerivative);
         if (view->parsed()) return viewer::runView(common, viewOptions);
         if (studyTr->parsed()) return runStudyTransmittance(common, studyOptions);
         return runDevices();

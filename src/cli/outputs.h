@@ -31,6 +31,7 @@ struct OutputInfo {
     double seconds = 0.0;
     std::vector<uint32_t> seeds;  // a merge: every shard's seed (empty: {seed})
     std::string shards;           // a merge: JSON list of the merged checkpoints (telescope:shards)
+    std::vector<std::pair<std::string, std::string>> extra;  // more metadata (a derivative's parameter)
 };
 
 // The checkpoint of a film rendered as `info` says.

@@ -120,6 +120,8 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     feature("environment map", f.environmentMap, "infinite_sphere with an image, importance-sampled",
             "no environment image");
     feature("sphere cap", f.capLight != 0xffffffffu, "infinite_sphere_cap emitter", "no infinite_sphere_cap emitter");
+    feature("russian roulette", in.russianRoulette, "paths end with probability 1 - max(throughput) from the second bounce",
+            "off: a derivative render's evaluations must take the same survival decisions");
     feature("debias", in.debias.estimator != DebiasEstimator::None, "debias block in the integrator",
             "no debias block: plain I(k)");
     feature("media", f.media, "media or forward boundaries present", "no participating media");
@@ -143,6 +145,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     plan.pathTraceSpec = {
         {kSpecMaxBounces, pathDepthK(in)},
         {kSpecMinBounces, in.minBounces},
+        {kSpecRoulette, in.russianRoulette},
         {kSpecDebiasMode, uint32_t(in.debias.estimator)},
         {kSpecPmfType, uint32_t(in.debias.pmf.type)},
         {kSpecPmfR, gpu::specFloat(in.debias.pmf.r)},

@@ -185,6 +185,46 @@ void Renderer::render(const RenderRequest& request) {
     stats_.samplesPerPixel = sampleIndex_;
 }
 
+void Renderer::setSceneVersion(const GpuScene& v, const Camera& camera) {
+    const GpuScene& g = gpuScene_;
+    auto put = [](gpu::Buffer& b, const auto& now, const auto& before, const char* what) {
+        if (now.size() != before.size())
+            throw std::invalid_argument(fmt::format("Renderer::setSceneVersion: {} differ in number", what));
+        b.upload(now);
+    };
+    put(prims_, v.prims, g.prims, "primitives");
+    put(nodes_, v.nodes, g.nodes, "BVH nodes");
+    put(materials_, v.materials, g.materials, "materials");
+    put(lights_, v.lights, g.lights, "lights");
+    put(media_, v.media, g.media, "media");
+    put(gridData_, v.gridData, g.gridData, "grid voxels");
+    put(primMedia_, v.primMedia, g.primMedia, "primitive media");
+    put(textures_, v.textureData, g.textureData, "texture texels");
+    put(environment_, v.environment, g.environment, "environment texels");
+    put(shadingNormals_, v.shadingNormals, g.shadingNormals, "shading normals");
+    const Camera& cam = camera_;
+    if (camera.width != cam.width || camera.height != cam.height || camera.fovDegrees != cam.fovDegrees ||
+        camera.medium != cam.medium || camera.filter != cam.filter)
+        throw std::invalid_argument("Renderer::setSceneVersion: only the camera's position and orientation may change");
+    if (!passes_->setCamera(camera)) throw std::invalid_argument("Renderer::setSceneVersion: the passes cannot move the camera");
+    camera_ = camera;
+}
+
+std::vector<glm::vec4> Renderer::renderSample(uint64_t index) {
+    accum_.fill(0);
+    sampleIndex_ = index;
+    RenderRequest one;
+    one.spp = 1;
+    render(one);
+    // Channel kChannelEstimate comes first: (hi, lo) pairs per pixel.
+    const size_t pixels = size_t(camera_.width) * camera_.height;
+    std::vector<glm::vec4> raw(pixels * 2);
+    accum_.download(raw.data(), raw.size() * sizeof(glm::vec4));
+    std::vector<glm::vec4> out(pixels);
+    for (size_t i = 0; i < pixels; ++i) out[i] = raw[2 * i] + raw[2 * i + 1];
+    return out;
+}
+
 void Renderer::resume(const Film& film) {
     const Camera& cam = camera_;
     if (sampleIndex_ != 0) throw std::logic_error("Renderer::resume after samples were rendered");

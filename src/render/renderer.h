@@ -95,6 +95,15 @@ public:
     // time. No new pipelines. Returns false (and changes nothing) when the integrator cannot
     // change its camera in place.
     bool restartWithCamera(const Camera& camera);
+    // Derivative renders (render/derivative.h): replaces the scene buffers' content by that of a
+    // version of the same scene with one parameter changed (same plan and buffer sizes: the caller
+    // checks; std::invalid_argument otherwise) and moves the camera to the version's.
+    void setSceneVersion(const GpuScene& version, const Camera& camera);
+    // Derivative renders: renders the one sample of global index `index` alone, after the
+    // accumulation is cleared, and returns its per-pixel estimate (rgb; w 1 where the sample was
+    // non-finite and dropped). Stats accumulate; film() afterwards holds that sample only.
+    std::vector<glm::vec4> renderSample(uint64_t index);
+    const GpuScene& gpuScene() const { return gpuScene_; }
     const RenderStats& stats() const { return stats_; }
     // Samples per pixel one dispatch adds at most; renders split at multiples of it add their
     // samples in the same dispatches as one render of the total, so their sums are bit-identical.

@@ -286,6 +286,9 @@ struct IntegratorSettings {
     PhotonSettings photon;  // photon_map and progressive_photon_map only
     // "transmittance_estimator": how every transmittance factor of a path is estimated.
     TransmittanceEstimatorSettings transmittance;
+    // Not a scene key: derivative renders (render/derivative.h) turn Russian roulette off, whose
+    // survival decisions depend on the throughput and so on the parameter being varied.
+    bool russianRoulette = true;
 };
 
 inline bool usesPhotons(const IntegratorSettings& s) { return s.type != IntegratorType::PathTracer; }
