@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "cli_process.h"
+
 #include <sys/wait.h>
 
 #include <cmath>
@@ -429,4 +431,45 @@ TEST_F(Cli, StudyTransmittanceWritesCsvHeatMapsAndSummary) {
     for (const char* e : {"ray_march", "debiased_ray_march", "delta_tracking", "ratio_tracking", "residual_ratio_tracking",
                           "unbiased_ray_march", "taylor"})
         EXPECT_TRUE(fs::exists(dir + "/heat_" + std::string(e) + ".png")) << e << " (gnuplot-nox installed?)";
+}
+
+// ---- Derivative images (docs/DERIVATIVES.md): bad parameters, the plan, the EXR's metadata ----
+
+TEST_F(Cli, DerivativeRefusesBadParameters) {
+    const std::string plane = test::sourcePath("scenes/point-plane.json") + " --set 'camera.resolution=[8,8]'";
+    auto render = [&](const std::string& args) { return "render " + plane + " -o " + out("d.exr") + " --spp 1 " + args; };
+    expectBadInput(render("--derivative 'bsdfs[0].type'"), {"bsdfs[0].type", "not a number"});         // a string
+    expectBadInput(render("--derivative 'bsdfs[0].roughness'"), {"bsdfs[0].roughness", "no such value"});  // missing
+    expectBadInput(render("--derivative 'camera.resolution[1]'"), {"camera.resolution[1]", "discrete"});
+    expectBadInput(render("--derivative 'integrator.max_bounces'"), {"integrator.max_bounces", "estimator"});
+    expectBadInput(render("--derivative 'bsdfs[0].albedo' --step -0.1"), {"--step", "positive"});
+    expectBadInput(render("--derivative 'bsdfs[0].albedo' --step 0"), {"--step", "positive"});
+    expectBadInput(render("--derivative 'bsdfs[0].albedo' --derivative-estimator central --step 0.6"),
+                   {"bsdfs[0].albedo", "refuses the value"});
+    expectBadInput(render("--derivative 'bsdfs[0].albedo' --derivative-estimator newton"), {"--derivative-estimator"});
+    expectBadInput(render("--derivative 'bsdfs[0].albedo' --derivative-pmf '{\"type\":\"geometric\",\"r\":1.5}'"),
+                   {"--derivative-pmf"});
+    expectBadInput(render("--derivative 'renderer.spp'"), {"renderer.spp"});
+    expectBadInput(render("--derivative 'bsdfs[0].albedo' --checkpoint " + out("c.ckpt")), {"--derivative"});
+}
+
+TEST_F(Cli, DerivativePlanAndMetadata) {
+    const std::string plane = test::sourcePath("scenes/point-plane.json") + " --set 'camera.resolution=[8,8]'";
+    const std::string planFile = out("plan.txt");
+    const int status = std::system((std::string(TELESCOPE_BINARY) + " plan " + plane +
+                                    " --derivative 'primitives[1].transform.position[1]' > " + planFile).c_str());
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    const std::string text = readText(planFile);
+    for (const char* line : {"parameter   primitives[1].transform.position[1] = 1", "h_0         0.0625",
+                             "estimator   single_term", "geometric pmf, r = 0.5", "3.50 path_trace evaluations per sample",
+                             "russian roulette off"})
+        EXPECT_NE(text.find(line), std::string::npos) << "missing '" << line << "' in:\n" << text;
+    CommandResult r = run("render " + plane + " --derivative 'bsdfs[0].albedo' --spp 4 -q -o " + out("d.exr"));
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    const auto meta = telescope::test::exrStringAttributes(out("d.exr"));
+    EXPECT_EQ(meta.at("telescope:derivative_key"), "bsdfs[0].albedo");
+    EXPECT_EQ(meta.at("telescope:derivative_value"), "0.5");
+    EXPECT_EQ(meta.at("telescope:derivative_step"), "0.03125");  // |theta| / 16
+    EXPECT_EQ(meta.at("telescope:derivative_estimator"), "single_term");
+    EXPECT_TRUE(fs::exists(out("d.png")));
 }

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -49,7 +50,9 @@ Scene loadWithOverrides(const CommonOptions& o) {
 DerivativeSettings derivativeSettings(const DerivativeCli& d) {
     DerivativeSettings s;
     s.key = d.key;
-    s.step = d.step;
+    if (!std::isnan(d.step) && !(d.step > 0.0 && std::isfinite(d.step)))
+        throw InputError("", "--step", fmt::format("h_0 must be a positive number, not {}", d.step));
+    s.step = std::isnan(d.step) ? 0.0 : d.step;
     s.estimator = parseDerivativeEstimator(d.estimator, "--derivative-estimator");
     s.levels = d.levels;
     if (!d.pmf.empty()) {
@@ -305,7 +308,10 @@ int runDerivativeRender(const CommonOptions& common, const RenderOptions& o, Sce
                   {"telescope:derivative_value", fmt::format("{:.17g}", p.value)},
                   {"telescope:derivative_step", fmt::format("{:.17g}", p.step)},
                   {"telescope:derivative_estimator", derivativeEstimatorName(settings.estimator)}};
-    writeImages(output, film, info);
+    ImageOutputOptions exrOnly = output;
+    exrOnly.noPng = true;
+    writeImages(exrOnly, film, info);
+    if (!output.noPng) writeSignedPngPreview(output.pngPath, film);
     if (!o.statsPath.empty()) {
         nlohmann::json j;
         j["scene"] = scene.path;
@@ -493,8 +499,19 @@ int runConverge(const CommonOptions& common, const ConvergeOptionsCli& c) {
     o.scenePath = common.scenePath;
     for (const auto& s : common.sets) o.sets.push_back(parseOverride(s));
     o.referencePath = c.referencePath;
-    for (const auto& p : c.presets) o.methods.push_back(parseMethod(p, "--methods"));
-    for (const auto& m : c.custom) o.methods.push_back(parseMethod(m, "--method"));
+    if (!c.derivative.key.empty()) {
+        // Derivative estimators compared against a derivative reference (render --derivative).
+        o.derivative = true;
+        o.derivativeSettings = derivativeSettings(c.derivative);
+        if (!c.custom.empty()) throw InputError("", "--method", "with --derivative the methods are derivative estimators (--methods)");
+        for (const auto& p : c.presets) {
+            o.derivativeEstimators.push_back(parseDerivativeEstimator(p, "--methods"));
+            o.methods.push_back(Method{p, {}, std::string("derivative estimator ") + p});
+        }
+    } else {
+        for (const auto& p : c.presets) o.methods.push_back(parseMethod(p, "--methods"));
+        for (const auto& m : c.custom) o.methods.push_back(parseMethod(m, "--method"));
+    }
     o.timeBudget = c.timeBudget;
     o.slices = c.slices;
     o.sppList = c.sppList;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -28,7 +29,7 @@ struct ImageOutputOptions {
 // --derivative KEY and its options (render, plan): render/derivative.h.
 struct DerivativeCli {
     std::string key;             // empty: a radiance render
-    double step = 0.0;           // --step (0: default)
+    double step = std::numeric_limits<double>::quiet_NaN();  // --step (NaN: not given, the default)
     std::string estimator = "single_term";
     uint32_t levels = 12;
     std::string pmf;             // JSON text of a pmf ({"type": "geometric", "r": 0.5}); empty: default
@@ -61,6 +62,7 @@ struct MergeOptions {
 };
 
 struct ConvergeOptionsCli {
+    DerivativeCli derivative;  // --derivative KEY: the methods are derivative estimators
     std::string referencePath;
     std::vector<std::string> presets;  // --methods A,B
     std::vector<std::string> custom;   // --method 'LABEL: key=value; ...'

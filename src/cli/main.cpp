@@ -151,6 +151,7 @@ int main(int argc, char** argv) {
                          "Measure the error over pixels X,Y,W,H only (e.g. a caustic); the strip shows that crop")
         ->delimiter(',');
     converge->add_option("-o,--output", convergeOptions.outDir, "Output directory")->required();
+    addDerivative(converge, convergeOptions.derivative);
 
     // ---- study transmittance ----
     StudyTransmittanceCli studyOptions;

@@ -74,9 +74,9 @@ DerivativeEstimator parseDerivativeEstimator(const std::string& name, const std:
                      fmt::format("unknown derivative estimator '{}' (forward, central, single_term, sum, progressive)", name));
 }
 
-double defaultDerivativeStep(double theta, const std::string& key, double sceneExtent) {
+double defaultDerivativeStep(double theta, const std::string& key, double size) {
+    if (key.find("position") != std::string::npos) return size / 16.0;
     if (theta != 0.0) return std::abs(theta) / 16.0;
-    if (key.find("position") != std::string::npos) return sceneExtent / 16.0;
     return 1.0 / 16.0;
 }
 
@@ -120,12 +120,36 @@ DerivativeRenderer::DerivativeRenderer(gpu::Context& context, const Scene& scene
         parameter_.step = settings.step;
         parameter_.stepOrigin = "given (--step)";
     } else {
-        const float extent = renderer_->gpuScene().features.sceneExtent;
-        parameter_.step = defaultDerivativeStep(parameter_.value, key, extent);
-        parameter_.stepOrigin =
-            parameter_.value != 0.0 ? "default: |theta| / 16"
-            : key.find("position") != std::string::npos ? fmt::format("default: the scene's extent {:.4g} / 16", extent)
-                                                        : "default: 1 / 16 (theta is 0)";
+        // A position's scale: the moved object's own size where its transform states a scale,
+        // else the scene's extent.
+        double size = renderer_->gpuScene().features.sceneExtent;
+        std::string sizeOrigin = fmt::format("the scene's extent {:.4g}", size);
+        if (parameter_.value != 0.0 && std::abs(parameter_.value) < size) {
+            size = std::abs(parameter_.value);
+            sizeOrigin = "|theta| (smaller than the scene's extent)";
+        }
+        if (const size_t at = key.rfind(".position"); at != std::string::npos) {
+            const std::string scaleKey = key.substr(0, at) + ".scale";
+            const nlohmann::json::json_pointer sp = overridePointer(scaleKey, file);
+            if (scene.document.contains(sp)) {
+                const nlohmann::json& sv = scene.document[sp];
+                // The smallest: a step small against the object's thinnest side.
+                double smallest = 0.0;
+                if (sv.is_number()) smallest = std::abs(sv.get<double>());
+                if (sv.is_array())
+                    for (const auto& c : sv)
+                        if (c.is_number() && c.get<double>() != 0.0)
+                            smallest = smallest == 0.0 ? std::abs(c.get<double>()) : std::min(smallest, std::abs(c.get<double>()));
+                if (smallest > 0.0) {
+                    size = smallest;
+                    sizeOrigin = fmt::format("the object's smallest scale {:.4g} ({})", size, scaleKey);
+                }
+            }
+        }
+        parameter_.step = defaultDerivativeStep(parameter_.value, key, size);
+        parameter_.stepOrigin = key.find("position") != std::string::npos ? "default for a position: " + sizeOrigin + " / 16"
+                                : parameter_.value != 0.0                   ? "default: |theta| / 16"
+                                                                            : "default: 1 / 16 (theta is 0)";
     }
 
     // Discrete values: an integer in the document that the scene refuses half-way to the next.
@@ -338,9 +362,11 @@ void DerivativeRenderer::render(const RenderRequest& request) {
     // (at most ~64 MiB of them).
     const uint64_t batchMax = std::clamp<uint64_t>((uint64_t(64) << 20) / (pixels * sizeof(glm::vec4) * 4), 1, 32);
     uint64_t done = 0;
+    uint64_t timedBatch = 1;  // a timed render's batch doubles while a batch takes under 0.1 s
     while (timed ? secondsSince(start) < request.timeLimit : done < request.spp) {
         if (request.stop && request.stop()) break;
-        const uint64_t n = timed ? batchMax : std::min(batchMax, request.spp - done);
+        const auto batchStart = Clock::now();
+        const uint64_t n = timed ? timedBatch : std::min(batchMax, request.spp - done);
         if (nextSample_ + n >= kIndependentStride) throw std::runtime_error("derivative render: too many samples");
         // Which samples need which version.
         std::map<double, std::vector<uint64_t>> needs;
@@ -365,6 +391,7 @@ void DerivativeRenderer::render(const RenderRequest& request) {
             ++ordinal;
         }
         for (uint64_t i = 0; i < n; ++i) addSample(nextSample_ + i, images[i]);
+        if (timed && secondsSince(batchStart) < 0.1) timedBatch = std::min(batchMax, timedBatch * 2);
         nextSample_ += n;
         done += n;
         film_.setSamplesPerPixel(nextSample_);

@@ -70,9 +70,11 @@ struct DerivativeParameter {
     std::string stepOrigin;  // how h_0 was chosen
 };
 
-// The default h_0: 1/16 of |theta|, or where theta is 0, 1/16 of the scene's extent for positions
-// (keys with "position") and 1/16 otherwise.
-double defaultDerivativeStep(double theta, const std::string& key, double sceneExtent);
+// The default h_0: for a position (a key with "position": its value depends on an arbitrary
+// origin) 1/16 of `size`: the moved object's smallest transform scale, else the smaller of |theta|
+// (where not 0) and the scene's extent;
+// for any other value 1/16 of |theta|, or 1/16 where theta is 0.
+double defaultDerivativeStep(double theta, const std::string& key, double size);
 
 class DerivativeRenderer {
 public:

@@ -110,6 +110,32 @@ void writePngPreview(const std::string& path, const Film& film) {
     writeSrgbPng(path, int(film.width()), int(film.height()), rgb);
 }
 
+void writeSignedPngPreview(const std::string& path, const Film& film) {
+    // The scale: the 99th percentile of the nonzero |luminance|s (a few outliers do not wash out
+    // the rest; derivatives are often 0 almost everywhere).
+    std::vector<double> lum(film.pixelCount()), mags;
+    for (size_t i = 0; i < film.pixelCount(); ++i) {
+        const glm::dvec3 e = film.mean(shader::kChannelEstimate, i);
+        lum[i] = (e.x + e.y + e.z) / 3.0;
+        if (lum[i] != 0.0 && std::isfinite(lum[i])) mags.push_back(std::abs(lum[i]));
+    }
+    double scale = 0.0;
+    if (!mags.empty()) {
+        const size_t k = std::min(mags.size() - 1, size_t(0.99 * double(mags.size())));
+        std::nth_element(mags.begin(), mags.begin() + ptrdiff_t(k), mags.end());
+        scale = mags[k];
+    }
+    std::vector<uint8_t> rgb(film.pixelCount() * 3);
+    for (size_t i = 0; i < lum.size(); ++i) {
+        const double t = scale > 0.0 && std::isfinite(lum[i]) ? std::clamp(lum[i] / scale, -1.0, 1.0) : 0.0;
+        // White at 0, red for positive, blue for negative (display only: the EXR keeps the values).
+        const double fade = 1.0 - std::abs(t);
+        const glm::dvec3 c = t >= 0.0 ? glm::dvec3(1.0, fade, fade) : glm::dvec3(fade, fade, 1.0);
+        for (int ch = 0; ch < 3; ++ch) rgb[i * 3 + ch] = uint8_t(std::lround(255.0 * c[ch]));
+    }
+    writeRgb8Png(path, int(film.width()), int(film.height()), rgb);
+}
+
 RgbImage readExrChannels(const std::string& path, const std::vector<std::string>& channels) {
     RgbImage img;
     try {

@@ -20,6 +20,10 @@ void writeExr(const std::string& path, const Film& film, const ImageMetadata& me
 // sRGB preview of the estimate; negative and >1 values are clipped for display only.
 void writePngPreview(const std::string& path, const Film& film);
 
+// Signed false colour of the estimate's mean over the channels (derivative images): white at 0,
+// red positive, blue negative, full colour at the 99th percentile of the nonzero |value|s.
+void writeSignedPngPreview(const std::string& path, const Film& film);
+
 // Linear RGB floats (row-major) to an 8-bit sRGB PNG, clipped to [0, 1] for display only.
 void writeSrgbPng(const std::string& path, int width, int height, const std::vector<float>& rgb);
 // 8-bit RGB bytes (row-major, already encoded) to a PNG, written to a temporary file and moved

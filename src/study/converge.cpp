@@ -183,8 +183,20 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
                                                                                  : fmt::format("alpha = {:.2f}", c.alpha));
             }
             summary.settings.push_back(resolvedSettings(scene));
-            Renderer renderer(context, scene, seed);
-            if (si == 0) summary.estimator = renderer.plan().estimator;
+            // A radiance render, or a derivative render (its own Renderer inside).
+            std::unique_ptr<Renderer> radiance;
+            std::unique_ptr<DerivativeRenderer> derivative;
+            if (o.derivative) {
+                DerivativeSettings d = o.derivativeSettings;
+                d.estimator = o.derivativeEstimators.at(mi);
+                derivative = std::make_unique<DerivativeRenderer>(context, scene, d, seed);
+            } else {
+                radiance = std::make_unique<Renderer>(context, scene, seed);
+            }
+            const Renderer& renderer = derivative ? derivative->renderer() : *radiance;
+            auto wallSeconds = [&] { return derivative ? derivative->seconds() : renderer.stats().wallSeconds; };
+            auto samples = [&] { return derivative ? derivative->film().samplesPerPixel() : renderer.stats().samplesPerPixel; };
+            if (si == 0) summary.estimator = derivative ? derivative->description() : renderer.plan().estimator;
             summary.pilotGpuSeconds += pilot.pilotGpuSeconds / o.seedCount;
             summary.pilotWallSeconds += pilot.pilotWallSeconds / o.seedCount;
             if (si == 0) log(fmt::format("{}: {}", method.label, summary.estimator));
@@ -193,24 +205,29 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
             for (size_t s = 0; s < sliceCount; ++s) {
                 RenderRequest request;
                 if (o.timeBudget > 0.0) {
-                    request.timeLimit = timeTargets[s] - renderer.stats().wallSeconds - pilot.pilotWallSeconds;
+                    request.timeLimit = timeTargets[s] - wallSeconds() - pilot.pilotWallSeconds;
                     const bool lastSlice = s + 1 == sliceCount;
-                    if (request.timeLimit <= 0.0 && !(lastSlice && renderer.stats().samplesPerPixel == 0))
+                    if (request.timeLimit <= 0.0 && !(lastSlice && samples() == 0))
                         continue;  // the last batch (or the pilot) already reached this slice
                     // A pilot that used the whole budget still gets one batch, so its method shows
                     // up, late, in the plot and the table.
                     if (request.timeLimit <= 0.0) request.spp = 1, request.timeLimit = 0.0;
                 } else {
-                    request.spp = o.sppList[s] - renderer.stats().samplesPerPixel;
+                    request.spp = o.sppList[s] - samples();
                 }
-                renderer.render(request);
-                film = renderer.film();
+                if (derivative) {
+                    derivative->render(request);
+                    film = derivative->film();
+                } else {
+                    radiance->render(request);
+                    film = radiance->film();
+                }
                 ConvergePoint p;
                 p.method = method.label;
                 p.seed = seed;
                 p.slice = uint32_t(s);
                 p.spp = film.samplesPerPixel();
-                p.wallSeconds = renderer.stats().wallSeconds + pilot.pilotWallSeconds;
+                p.wallSeconds = wallSeconds() + pilot.pilotWallSeconds;
                 p.gpuSeconds = gpuSeconds(renderer.stats()) + pilot.pilotGpuSeconds;
                 p.error = compareToReference(film, reference, o.region);
                 run.push_back(p);

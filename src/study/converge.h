@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gpu/context.h"
+#include "render/derivative.h"
 #include "study/error_metrics.h"
 #include "study/methods.h"
 
@@ -35,6 +36,11 @@ struct ConvergeOptions {
     PixelRegion region;               // errors over these pixels only (w = 0: all); also the strip's crop
     std::string outDir;
     std::function<void(const std::string&)> log;  // progress lines (may be empty)
+    // Derivative studies (--derivative KEY): the methods are derivative estimators (one per method,
+    // in `derivativeEstimators`), rendered with these settings against a derivative reference.
+    bool derivative = false;
+    DerivativeSettings derivativeSettings;
+    std::vector<DerivativeEstimator> derivativeEstimators;
 };
 
 // One slice of one method: of one seed's run, or (seed = kAllSeeds) the mean over the seeds of
