@@ -450,7 +450,6 @@ TEST_F(Cli, DerivativeRefusesBadParameters) {
     expectBadInput(render("--derivative 'bsdfs[0].albedo' --derivative-pmf '{\"type\":\"geometric\",\"r\":1.5}'"),
                    {"--derivative-pmf"});
     expectBadInput(render("--derivative 'renderer.spp'"), {"renderer.spp"});
-    expectBadInput(render("--derivative 'bsdfs[0].albedo' --checkpoint " + out("c.ckpt")), {"--derivative"});
 }
 
 TEST_F(Cli, DerivativePlanAndMetadata) {
@@ -472,4 +471,46 @@ TEST_F(Cli, DerivativePlanAndMetadata) {
     EXPECT_EQ(meta.at("telescope:derivative_step"), "0.03125");  // |theta| / 16
     EXPECT_EQ(meta.at("telescope:derivative_estimator"), "single_term");
     EXPECT_TRUE(fs::exists(out("d.png")));
+    // Stopping and resuming equals one long render (sample indices and levels continue).
+    const std::string d = plane + " --derivative 'bsdfs[0].albedo' -q --no-png";
+    ASSERT_EQ(run("render " + d + " --spp 3 -o " + out("a.exr") + " --checkpoint " + out("a.ckpt")).exitCode, 0);
+    ASSERT_EQ(run("render " + d + " --spp 2 -o " + out("b.exr") + " --resume " + out("a.ckpt") + " --checkpoint " +
+                  out("b.ckpt")).exitCode, 0);
+    ASSERT_EQ(run("render " + d + " --spp 5 -o " + out("c.exr") + " --checkpoint " + out("c.ckpt")).exitCode, 0);
+    EXPECT_TRUE(telescope::test::sameSums(loadCheckpoint(out("b.ckpt")).film, loadCheckpoint(out("c.ckpt")).film));
+    // A radiance render's checkpoint is not a derivative's.
+    ASSERT_EQ(run("render " + plane + " -q --no-png --spp 1 -o " + out("r.exr") + " --checkpoint " + out("r.ckpt")).exitCode, 0);
+    CommandResult mixed = run("render " + d + " --spp 1 -o " + out("m.exr") + " --resume " + out("r.ckpt"));
+    EXPECT_EQ(mixed.exitCode, 2) << mixed.stderrText;
+    EXPECT_NE(mixed.stderrText.find("another estimator"), std::string::npos) << mixed.stderrText;
+}
+
+TEST_F(Cli, ConvergeDerivativeSeparatesABiasedStepFromTheUnbiasedSeries) {
+    // d/dz of the point light's height (smooth): the reference is the sum estimator at 256 spp;
+    // the forward difference at h_0 = 0.25 keeps its bias, single_term does not.
+    const std::string plane = test::sourcePath("scenes/point-plane.json") +
+                              " --set 'camera.resolution=[16,16]' --derivative 'primitives[1].transform.position[1]' "
+                              "--step 0.25 -q";
+    ASSERT_EQ(run("render " + plane + " --derivative-estimator sum --spp 256 --no-png -o " + out("ref.exr")).exitCode, 0);
+    CommandResult r = run("converge " + plane + " --reference " + out("ref.exr") +
+                          " --methods forward,single_term --spp 8,32 -o " + out("conv"));
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    std::istringstream csv(readText(out("conv/convergence.csv")));
+    std::string line;
+    std::getline(csv, line);
+    std::map<std::string, double> finalRmse;
+    while (std::getline(csv, line)) {
+        std::vector<std::string> cells;
+        std::stringstream ls(line);
+        for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
+        ASSERT_EQ(cells.size(), 10u) << line;
+        finalRmse[cells[0]] = std::stod(cells[6]);
+    }
+    ASSERT_EQ(finalRmse.size(), 2u);
+    EXPECT_GT(finalRmse["\"forward\""], 3.0 * finalRmse["\"single_term\""]);
+    EXPECT_NE(readText(out("conv/report.md")).find("derivative d/d(primitives[1].transform.position[1])"), std::string::npos);
+    // Radiance presets are not derivative estimators.
+    CommandResult bad = run("converge " + plane + " --reference " + out("ref.exr") + " --methods biased:1 --spp 8 -o " +
+                            out("conv2"));
+    EXPECT_EQ(bad.exitCode, 2) << bad.stderrText;
 }

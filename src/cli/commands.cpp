@@ -270,47 +270,69 @@ void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Cont
 
 namespace {
 
-// `render --derivative KEY`: a derivative image (render/derivative.h).
-int runDerivativeRender(const CommonOptions& common, const RenderOptions& o, Scene& scene) {
+// `render --derivative KEY`: a derivative image (render/derivative.h). Checkpoints, --resume and
+// `merge` work as for radiance renders (a checkpoint names the derivative in its estimator).
+int runDerivativeRender(const CommonOptions& common, const RenderOptions& optionsIn, Scene& scene) {
+    RenderOptions o = optionsIn;
     InterruptGuard interrupts;
     const DerivativeSettings settings = derivativeSettings(o.derivative);
-    if (!o.resumePath.empty() || !o.output.checkpointPath.empty() || o.checkpointEvery > 0)
-        throw InputError("", "--derivative", "derivative renders cannot be checkpointed or resumed yet");
     ImageOutputOptions output = o.output;
+    if (output.checkpointPath.empty() && o.checkpointEvery > 0) output.checkpointPath = output.exrPath + ".checkpoint";
     checkImageOutputs(output);
     if (!o.statsPath.empty()) checkOutputPath(o.statsPath, "--stats-json", ".json");
     if (scene.integrator.debias.estimator != DebiasEstimator::None && scene.integrator.debias.pmf.type == PmfType::Auto)
         throw InputError(scene.path, "integrator.debias.pmf.type",
                          "a derivative render needs a fixed pmf: put the one the pilot of a radiance render chose in the scene");
+    std::optional<Checkpoint> resume;
+    if (!o.resumePath.empty()) {
+        resume = loadCheckpoint(o.resumePath);
+        if (!o.seedGiven) o.seed = resume->seed;
+        checkResumable(*resume, o.resumePath, scene, o.seed);
+    }
     reportIgnoredKeys(scene, common.quiet);
+    keepCheckpointsOnFailure({output.checkpointPath, o.resumePath});
     gpu::Context context(contextOptions(common));
     DerivativeRenderer renderer(context, scene, settings, o.seed);
+    if (resume) {
+        if (resume->estimator != renderer.description())
+            throw InputError(o.resumePath, "", fmt::format("checkpoint was rendered with another estimator ({}) than this one ({})",
+                                                           resume->estimator, renderer.description()));
+        renderer.resume(resume->film);
+    }
     if (!common.quiet) fmt::print(stderr, "{}", renderer.planText());
+    const DerivativeParameter& p = renderer.parameter();
+    OutputInfo info{scene.path, scene.document.dump(), renderer.description(), context.info().name,
+                    resolvedSettings(scene).dump(), o.seed, 0.0};
+    info.extra = {{"telescope:derivative_key", p.key},
+                  {"telescope:derivative_value", fmt::format("{:.17g}", p.value)},
+                  {"telescope:derivative_step", fmt::format("{:.17g}", p.step)},
+                  {"telescope:derivative_estimator", derivativeEstimatorName(settings.estimator)}};
+
     RenderRequest request;
     request.timeLimit = o.timeLimit;
     request.spp = o.timeLimit > 0 ? 0 : (o.spp ? o.spp : scene.renderer.spp);
     ProgressReporter progress(common.quiet, "derivative");
-    request.progress = [&](const RenderProgress& p) { progress(p); };
+    PeriodicCheckpoint periodic(o.checkpointEvery, output.checkpointPath,
+                                [&] { return checkpointOf(renderer.film(), info); });
+    request.progress = [&](const RenderProgress& pr) {
+        progress(pr);
+        periodic.afterBatch();
+    };
     request.stop = [] { return InterruptGuard::requested(); };
     renderer.render(request);
     progress.finish();
     checkValidation(context);
     warnLoopStats(renderer.renderer().stats());
-    if (InterruptGuard::requested()) {
-        fmt::print(stderr, "telescope: interrupted: nothing written\n");
-        return 130;
-    }
     const Film& film = renderer.film();
-    OutputInfo info{scene.path, scene.document.dump(), renderer.description(), context.info().name,
-                    resolvedSettings(scene).dump(), o.seed, renderer.seconds()};
-    const DerivativeParameter& p = renderer.parameter();
-    info.extra = {{"telescope:derivative_key", p.key},
-                  {"telescope:derivative_value", fmt::format("{:.17g}", p.value)},
-                  {"telescope:derivative_step", fmt::format("{:.17g}", p.step)},
-                  {"telescope:derivative_estimator", derivativeEstimatorName(settings.estimator)}};
-    ImageOutputOptions exrOnly = output;
-    exrOnly.noPng = true;
-    writeImages(exrOnly, film, info);
+    info.seconds = renderer.seconds();
+    const uint64_t resumedSpp = resume ? resume->film.samplesPerPixel() : 0;
+    if (InterruptGuard::requested())
+        return saveInterrupted(output, film, info, film.samplesPerPixel() - resumedSpp,
+                               "continue with --resume " +
+                                   (output.checkpointPath.empty() ? output.exrPath + ".checkpoint" : output.checkpointPath));
+    ImageOutputOptions exr = output;
+    exr.noPng = true;  // the preview is signed false colour
+    writeImages(exr, film, info);
     if (!output.noPng) writeSignedPngPreview(output.pngPath, film);
     if (!o.statsPath.empty()) {
         nlohmann::json j;
@@ -323,6 +345,7 @@ int runDerivativeRender(const CommonOptions& common, const RenderOptions& o, Sce
         j["evaluations"] = renderer.evaluations();
         j["estimator"] = renderer.description();
         j["non_finite_samples"] = film.nonFiniteSamples();
+        j["validation_messages"] = context.validationMessageCount();
         j["derivative"] = {{"key", p.key}, {"value", p.value}, {"step", p.step}};
         writeTextAtomically(o.statsPath, j.dump(2) + "\n");
     }

@@ -348,6 +348,15 @@ void DerivativeRenderer::addSample(uint64_t sample, const std::map<double, std::
     }
 }
 
+void DerivativeRenderer::resume(const Film& film) {
+    if (nextSample_ != 0) throw std::logic_error("DerivativeRenderer::resume after samples were rendered");
+    if (film.width() != film_.width() || film.height() != film_.height())
+        throw std::invalid_argument(fmt::format("cannot resume a {}x{} derivative render from a {}x{} film", film_.width(),
+                                                film_.height(), film.width(), film.height()));
+    film_ = film;
+    nextSample_ = film.samplesPerPixel();
+}
+
 void DerivativeRenderer::restart(DerivativeControl control) {
     settings_.control = control;
     film_ = Film(film_.width(), film_.height());

@@ -93,6 +93,10 @@ public:
     std::string planText() const;
     const Renderer& renderer() const { return *renderer_; }
 
+    // Continues from a film of this derivative render (same scene, settings and seed): later
+    // samples continue the same sequence (sample indices and levels), so a resumed render equals
+    // one long render. Only before the first render() call.
+    void resume(const Film& film);
     // Starts again from an empty film at sample index 0 with another control (tests: the same
     // pipelines serve an estimator and its control).
     void restart(DerivativeControl control);
