@@ -63,6 +63,19 @@ DerivativeSettings derivativeSettings(const DerivativeCli& d) {
             throw InputError("", "--derivative-pmf", fmt::format("'{}' is not JSON", d.pmf));
         }
         const std::string type = j.is_object() && j.contains("type") && j["type"].is_string() ? j["type"].get<std::string>() : "";
+        if (type == "auto") {
+            for (const auto& [k, v] : j.items())
+                if (k != "type" && k != "pilot_spp")
+                    throw InputError("", "--derivative-pmf", fmt::format("unknown key \"{}\" of the auto pmf", k));
+            s.autoPmf = true;
+            if (j.contains("pilot_spp")) {
+                if (!j["pilot_spp"].is_number_unsigned() || j["pilot_spp"].get<uint32_t>() < 1 || j["pilot_spp"].get<uint32_t>() > 1024)
+                    throw InputError("", "--derivative-pmf", "\"pilot_spp\" must be an integer in [1, 1024]");
+                s.pilotSpp = j["pilot_spp"].get<uint32_t>();
+            }
+            s.pmf.origin = "auto";
+            return s;
+        }
         auto number = [&](const char* name) {
             if (!j.contains(name) || !j[name].is_number())
                 throw InputError("", "--derivative-pmf", fmt::format("a {} pmf needs a number \"{}\"", type, name));

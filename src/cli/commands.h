@@ -31,7 +31,7 @@ struct DerivativeCli {
     std::string key;             // empty: a radiance render
     double step = std::numeric_limits<double>::quiet_NaN();  // --step (NaN: not given, the default)
     std::string estimator = "single_term";
-    uint32_t levels = 12;
+    uint32_t levels = 8;
     std::string pmf;             // JSON text of a pmf ({"type": "geometric", "r": 0.5}); empty: default
 };
 

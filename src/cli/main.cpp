@@ -70,9 +70,9 @@ int main(int argc, char** argv) {
         cmd->add_option("--step", d.step, "The derivative's largest finite-difference step h_0 (default: |value| / 16)");
         cmd->add_option("--derivative-estimator", d.estimator,
                         "forward, central, single_term (default), sum or progressive");
-        cmd->add_option("--derivative-levels", d.levels, "Levels of the telescoping series (default 12: h down to h_0 / 4096)");
+        cmd->add_option("--derivative-levels", d.levels, "Levels of the telescoping series (default 8: h down to h_0 / 256)");
         cmd->add_option("--derivative-pmf", d.pmf,
-                        "Level pmf, JSON: {\"type\": \"geometric\", \"r\": 0.5} (default) or power_law with alpha");
+                        "Level pmf, JSON: {\"type\": \"geometric\", \"r\": 0.5} (default), power_law with alpha, or {\"type\": \"auto\"} (a pilot measures the recipe)");
     };
     addDerivative(render, renderOptions.derivative);
     render->add_option("--checkpoint-every", renderOptions.checkpointEvery,

@@ -187,6 +187,64 @@ DerivativeRenderer::DerivativeRenderer(gpu::Context& context, const Scene& scene
         base.camera.forward == up.camera.forward && base.camera.up == up.camera.up)
         throw InputError(file, key, "changing it changes nothing the renderer uses (an ignored or unused key): its "
                                     "derivative image would be 0");
+    if (settings.autoPmf &&
+        (settings.estimator == DerivativeEstimator::SingleTerm || settings.estimator == DerivativeEstimator::Sum))
+        runPilot();
+}
+
+void DerivativeRenderer::runPilot() {
+    // Every level's D_j = I(j+1) - I(j) from the same pilot samples: f(0) and f(h_k), k <= levels.
+    // The pilot's sample indices lie past every render's (kIndependentStride x 3.5): its numbers
+    // are independent of the render's.
+    const auto start = Clock::now();
+    const uint32_t J = settings_.levels;
+    const double h0 = parameter_.step;
+    auto h = [&](uint32_t k) { return std::ldexp(h0, -int(k)); };
+    std::vector<double> offsets{0.0};
+    for (uint32_t k = 0; k <= J; ++k) offsets.push_back(h(k));
+    const uint64_t base = 3 * kIndependentStride + kIndependentStride / 2;
+    std::vector<std::map<double, std::vector<glm::vec4>>> images(settings_.pilotSpp);
+    for (double d : offsets) {
+        const Version& v = version(d);
+        renderer_->setSceneVersion(v.gpu, v.camera);
+        current_ = d;
+        for (uint32_t s = 0; s < settings_.pilotSpp; ++s) images[s][d] = renderer_->renderSample(base + s);
+    }
+    pilotMoments_.assign(J, 0.0);
+    const size_t pixels = film_.pixelCount();
+    for (uint32_t s = 0; s < settings_.pilotSpp; ++s)
+        for (size_t p = 0; p < pixels; ++p) {
+            auto f = [&](double d) { return glm::dvec3(images[s].at(d)[p]); };
+            auto I = [&](uint32_t k) { return (f(h(k)) - f(0.0)) / h(k); };
+            for (uint32_t j = 0; j < J; ++j) {
+                const glm::dvec3 dj = I(j + 1) - I(j);
+                const double m = glm::dot(dj, dj) / 3.0;
+                if (std::isfinite(m)) pilotMoments_[j] += m / double(settings_.pilotSpp);
+            }
+        }
+    // The recipe: p(j) ~ sqrt(M_j); a level the pilot saw no difference at keeps a floor of 1e-3
+    // of the largest weight, so that every level stays possible (unbiased).
+    table_.assign(J, 0.0);
+    double largest = 0.0, total = 0.0;
+    for (uint32_t j = 0; j < J; ++j) largest = std::max(largest, std::sqrt(pilotMoments_[j]));
+    for (uint32_t j = 0; j < J; ++j) {
+        table_[j] = largest > 0.0 ? std::max(std::sqrt(pilotMoments_[j]), 1e-3 * largest) : 1.0;
+        total += table_[j];
+    }
+    for (double& t : table_) t /= total;
+    pilotSeconds_ = secondsSince(start);
+}
+
+double DerivativeRenderer::predictedSecondMoment(bool defaultPmf) const {
+    if (pilotMoments_.empty()) return 0.0;
+    const PmfSettings def = DerivativeSettings::defaultDerivativePmf();
+    const double below = 1.0 - untruncatedTail(def, settings_.levels);
+    double sum = 0.0;
+    for (uint32_t j = 0; j < pilotMoments_.size(); ++j) {
+        const double p = defaultPmf ? (untruncatedTail(def, j) - untruncatedTail(def, j + 1)) / below : levelProbability(j);
+        sum += pilotMoments_[j] / p;
+    }
+    return sum;
 }
 
 DerivativeRenderer::~DerivativeRenderer() = default;
@@ -250,12 +308,18 @@ const DerivativeRenderer::Version& DerivativeRenderer::version(double delta) {
 }
 
 double DerivativeRenderer::levelTail(uint32_t j) const {
+    if (!table_.empty()) {
+        double tail = 0.0;
+        for (uint32_t i = j; i < table_.size(); ++i) tail += table_[i];
+        return tail;
+    }
     const double below = 1.0 - untruncatedTail(settings_.pmf, settings_.levels);
     return (untruncatedTail(settings_.pmf, j) - untruncatedTail(settings_.pmf, settings_.levels)) / below;
 }
 
 double DerivativeRenderer::levelProbability(uint32_t j) const {
     if (j >= settings_.levels) return 0.0;
+    if (!table_.empty()) return table_[j];
     return levelTail(j) - levelTail(j + 1);
 }
 
@@ -417,6 +481,13 @@ void DerivativeRenderer::render(const RenderRequest& request) {
     seconds_ += secondsSince(start);
 }
 
+std::string DerivativeRenderer::pmfText() const {
+    if (table_.empty()) return pmfDescription(settings_.pmf);
+    std::string t;
+    for (double p : table_) t += fmt::format("{}{:.4g}", t.empty() ? "" : " ", p);
+    return fmt::format("pmf \"auto\" (the recipe p(j) ~ sqrt(E[D_j^2]) from a {}-spp pilot): p = {}", settings_.pilotSpp, t);
+}
+
 std::string DerivativeRenderer::description() const {
     const DerivativeParameter& p = parameter_;
     std::string how;
@@ -425,11 +496,11 @@ std::string DerivativeRenderer::description() const {
     case DerivativeEstimator::Central: how = "central difference (f(h_0) - f(-h_0)) / (2 h_0), biased"; break;
     case DerivativeEstimator::SingleTerm:
         how = fmt::format("single-term I(0) + (I(j+1) - I(j)) / p(j), I(k) the forward difference at h_0 2^-k, levels "
-                          "0..{}, {}", settings_.levels - 1, pmfDescription(settings_.pmf));
+                          "0..{}, {}", settings_.levels - 1, pmfText());
         break;
     case DerivativeEstimator::Sum:
         how = fmt::format("Russian-roulette sum I(0) + sum_(i<=j) (I(i+1) - I(i)) / P(J >= i), levels 0..{}, {}",
-                          settings_.levels - 1, pmfDescription(settings_.pmf));
+                          settings_.levels - 1, pmfText());
         break;
     case DerivativeEstimator::Progressive:
         how = fmt::format("progressive central differences at h_0 2^-k, k = floor(log2(s+1) / 3) at sample s (h ~ "
@@ -461,8 +532,30 @@ std::string DerivativeRenderer::planText() const {
     if (settings_.estimator == DerivativeEstimator::SingleTerm || settings_.estimator == DerivativeEstimator::Sum)
         s += fmt::format("  pmf         {}, truncated to levels 0..{} (unbiased for the forward difference at "
                          "h_0 / 2^{} = {:.3g})\n",
-                         pmfDescription(settings_.pmf), settings_.levels - 1, settings_.levels,
-                         std::ldexp(p.step, -int(settings_.levels)));
+                         pmfText(), settings_.levels - 1, settings_.levels, std::ldexp(p.step, -int(settings_.levels)));
+    if (!pilotMoments_.empty()) {
+        std::string moments;
+        for (double m : pilotMoments_) moments += fmt::format("{}{:.3g}", moments.empty() ? "" : " ", m);
+        s += fmt::format("  pilot       {} spp x {} renders in {:.2f} s; E[D_j^2] summed over pixels, j = 0..{}: {}\n",
+                         settings_.pilotSpp, settings_.levels + 2, pilotSeconds_, settings_.levels - 1, moments);
+        const double chosen = predictedSecondMoment(false), geometric = predictedSecondMoment(true);
+        s += fmt::format("  predicted   correction's second moment sum_j E[D_j^2] / p(j): {:.4g} with this pmf, {:.4g} "
+                         "with geometric r = 0.5 (equal work per sample)\n",
+                         chosen, geometric);
+        // Growth from the first levels on (visibility: E[D_j^2] ~ 2^j) means infinite variance; growth
+        // after a fall is single-precision rounding (E[D_j^2] ~ 4^j eps^2 / h_0^2).
+        const std::vector<double>& m = pilotMoments_;
+        if (m.size() >= 3 && m[1] > 1.5 * m[0] && m[2] > 1.5 * m[1]) {
+            s += "  warning     E[D_j^2] grows from the first levels on (an edge of visibility moves?): the unbiased "
+                 "forms have infinite variance here; use the progressive estimator\n";
+        } else if (m.size() >= 3) {
+            const size_t low = size_t(std::min_element(m.begin(), m.end()) - m.begin());
+            if (low + 1 < m.size() && m.back() > 4.0 * m[low])
+                s += fmt::format("  note        E[D_j^2] is smallest at level {} and grows beyond it (single-precision "
+                                 "rounding): --derivative-levels {} would cut the variance, at a bias O(h_0 / 2^{})\n",
+                                 low, low + 1, low + 1);
+        }
+    }
     if (settings_.estimator == DerivativeEstimator::Progressive)
         s += fmt::format("  schedule    h = h_0 2^-floor(log2(s+1)/3) at sample s, down to h_0 / 2^{}\n", settings_.levels);
     s += fmt::format("  passes      {:.2f} path_trace evaluations per sample (expected), each with the same random "

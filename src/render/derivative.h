@@ -56,7 +56,13 @@ struct DerivativeSettings {
     // The level pmf of single_term and sum, truncated to levels 0 .. levels-1. The default follows
     // the recipe: for a smooth f, E[D_j] and its spread fall as 2^-j, so p(j) ~ 2^-j (r = 0.5).
     PmfSettings pmf = defaultDerivativePmf();
-    uint32_t levels = 12;  // the series stops at I(levels): h_levels = h_0 / 4096 by default
+    // The series stops at I(levels): h_levels = h_0 / 256 by default. Deeper levels cost variance:
+    // single-precision rounding makes E[D_j^2] grow again past about level 7 (docs/DERIVATIVES.md).
+    uint32_t levels = 8;
+    // pmf "auto": a pilot of pilotSpp samples measures the image's second moment E[D_j^2] at every
+    // level and sets p(j) ~ sqrt(E[D_j^2]) (the recipe; every level costs the same two renders).
+    bool autoPmf = false;
+    uint32_t pilotSpp = 8;
     DerivativeControl control = DerivativeControl::None;
 
     static PmfSettings defaultDerivativePmf();
@@ -91,6 +97,7 @@ public:
     std::string description() const;
     // The plan's lines: parameter, h_0, estimator, pmf, evaluations per sample.
     std::string planText() const;
+    std::string pmfText() const;  // the level pmf in words (with the pilot's table)
     const Renderer& renderer() const { return *renderer_; }
 
     // Continues from a film of this derivative render (same scene, settings and seed): later
@@ -111,13 +118,19 @@ public:
     std::vector<double> offsetsOf(uint64_t sample, uint32_t* level = nullptr) const;
     // Level j of sample s (single_term, sum).
     uint32_t drawLevel(uint64_t sample) const;
-    // P(J = j) and P(J >= j) of the truncated pmf.
+    // P(J = j) and P(J >= j) of the truncated pmf (or of the pilot's table).
     double levelProbability(uint32_t j) const;
     double levelTail(uint32_t j) const;
+    // pmf "auto": the pilot's measured sum over pixels of E[D_j^2] per level (empty without one).
+    const std::vector<double>& pilotSecondMoments() const { return pilotMoments_; }
+    // The correction's predicted second moment sum_j M_j / p(j) (M_j: the pilot's moments) with
+    // this render's pmf and with the default geometric pmf; 0 without a pilot.
+    double predictedSecondMoment(bool defaultPmf) const;
 
 private:
     struct Version;
     const Version& version(double delta);
+    void runPilot();  // pmf "auto": fills pilotMoments_ and table_
     void addSample(uint64_t sample, const std::map<double, std::vector<glm::vec4>>& images);
 
     gpu::Context& context_;
@@ -132,6 +145,9 @@ private:
     uint64_t nextSample_ = 0;
     double seconds_ = 0.0, versionSeconds_ = 0.0;
     uint64_t evaluations_ = 0;
+    std::vector<double> pilotMoments_;
+    std::vector<double> table_;  // pmf "auto": p(j), j < levels (empty: the parametric pmf)
+    double pilotSeconds_ = 0.0;
 };
 
 }  // namespace telescope
