@@ -125,7 +125,9 @@ std::vector<double> pointPlaneExact(uint32_t res, uint32_t block) {
 }
 
 TEST_F(DerivativeRender, PointLightHeightMatchesTheClosedFormAndALargeForwardStepDoesNot) {
-    constexpr uint32_t kRes = 32, kBlock = 8, kBatches = 16;
+    // 12 levels: the estimates are unbiased for I(levels), whose bias h_0 2^-levels L'' / 2 the auto
+    // pmf resolves at 8 levels and h_0 = 0.25 (t = -4.2 in a corner block, within the bound).
+    constexpr uint32_t kRes = 32, kBlock = 8, kBatches = 16, kLevels = 12;
     constexpr uint64_t kSpp = 16;
     const Scene scene = loadTestScene("scenes/point-plane.json", {{"camera.resolution", "[32, 32]"}});
     const std::vector<double> exact = pointPlaneExact(kRes, kBlock);
@@ -136,6 +138,7 @@ TEST_F(DerivativeRender, PointLightHeightMatchesTheClosedFormAndALargeForwardSte
         DerivativeSettings s;
         s.key = "primitives[1].transform.position[1]";
         s.step = 0.25;
+        s.levels = kLevels;
         s.estimator = e;
         DerivativeRenderer r(sharedContext(), scene, s, 7);
         return tTest(renderBatches(r, kBatches, kSpp, kBlock), exact);
@@ -143,6 +146,28 @@ TEST_F(DerivativeRender, PointLightHeightMatchesTheClosedFormAndALargeForwardSte
     for (auto e : {DerivativeEstimator::SingleTerm, DerivativeEstimator::Sum}) {
         const TSummary t = run(e);
         EXPECT_EQ(t.failing, 0u) << derivativeEstimatorName(e) << ": " << t.worst << " (threshold " << t.threshold << ")";
+    }
+    // pmf "auto": the pilot's table is a pmf, its moments fall over the first levels (a smooth
+    // parameter), and the render with it stays unbiased.
+    {
+        DerivativeSettings s;
+        s.key = "primitives[1].transform.position[1]";
+        s.step = 0.25;
+        s.levels = kLevels;
+        s.autoPmf = true;
+        DerivativeRenderer r(sharedContext(), scene, s, 13);
+        const std::vector<double>& m = r.pilotSecondMoments();
+        ASSERT_EQ(m.size(), s.levels);
+        EXPECT_LT(m[1], 0.5 * m[0]);
+        EXPECT_LT(m[2], 0.5 * m[1]);
+        double total = 0.0;
+        for (uint32_t j = 0; j < s.levels; ++j) {
+            EXPECT_GT(r.levelProbability(j), 0.0);
+            total += r.levelProbability(j);
+        }
+        EXPECT_NEAR(total, 1.0, 1e-12);
+        const TSummary t = tTest(renderBatches(r, kBatches, kSpp, kBlock), exact);
+        EXPECT_EQ(t.failing, 0u) << "auto pmf: " << t.worst;
     }
     // Positive control: the forward difference at h_0 = 0.25 (its bias ~ h_0 / 2 d2L/dz2).
     const TSummary forward = run(DerivativeEstimator::Forward);
