@@ -468,15 +468,7 @@ void DerivativeRenderer::render(const RenderRequest& request) {
         nextSample_ += n;
         done += n;
         film_.setSamplesPerPixel(nextSample_);
-        if (request.progress) {
-            RenderProgress p;
-            p.samplesDone = done;
-            p.samplesTarget = timed ? 0 : request.spp;
-            p.seconds = secondsSince(start);
-            p.timeLimit = request.timeLimit;
-            p.pathsPerSecond = p.seconds > 0.0 ? double(done) * double(pixels) / p.seconds : 0.0;
-            request.progress(p);
-        }
+        if (request.progress) request.progress(progressOf(request, done, secondsSince(start), double(pixels)));
     }
     seconds_ += secondsSince(start);
 }

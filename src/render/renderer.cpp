@@ -171,15 +171,7 @@ void Renderer::render(const RenderRequest& request) {
             if (left > 0.0 && perUnitSeconds > 0.0)
                 unitsPerBatch = std::clamp<uint32_t>(uint32_t(left / perUnitSeconds), 1, unitsPerBatch);
         }
-        if (request.progress) {
-            RenderProgress p;
-            p.samplesDone = done;
-            p.samplesTarget = timed ? 0 : request.spp;
-            p.seconds = secondsSince(start);
-            p.timeLimit = request.timeLimit;
-            p.pathsPerSecond = p.seconds > 0.0 ? double(done) * pixels / p.seconds : 0.0;
-            request.progress(p);
-        }
+        if (request.progress) request.progress(progressOf(request, done, secondsSince(start), pixels));
     }
     stats_.wallSeconds += secondsSince(start);
     stats_.samplesPerPixel = sampleIndex_;

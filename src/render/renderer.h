@@ -46,6 +46,17 @@ struct RenderRequest {
     std::function<bool()> stop;
 };
 
+// The progress report of a render that has added `done` samples per pixel in `seconds`.
+inline RenderProgress progressOf(const RenderRequest& request, uint64_t done, double seconds, double pixels) {
+    RenderProgress p;
+    p.samplesDone = done;
+    p.samplesTarget = request.timeLimit > 0.0 ? 0 : request.spp;
+    p.seconds = seconds;
+    p.timeLimit = request.timeLimit;
+    p.pathsPerSecond = seconds > 0.0 ? double(done) * pixels / seconds : 0.0;
+    return p;
+}
+
 struct PassStats {
     uint64_t dispatches = 0;
     double gpuMs = 0.0;
