@@ -258,3 +258,27 @@ TEST_F(Viewer, BadScriptingInputIsBadInput) {
         EXPECT_TRUE(r.err.find("--keys") != std::string::npos || r.err.find("--channel") != std::string::npos) << r.err;
     }
 }
+
+// Derivative images (--derivative): the signed view (blue where raising the light dims the plane,
+// red far out), the plan's derivative lines, and the save key's EXR = `render --derivative`.
+TEST_F(Viewer, DerivativeViewIsSignedAndSavesTheRenderedDerivative) {
+    const std::string scene = test::sourcePath("scenes/point-plane.json");
+    const std::string args = "--set 'camera.resolution=[32,32]' --derivative 'primitives[1].transform.position[1]' --seed 4";
+    Result v = view(scene + " " + args + " --spp 6 --frames 12 -o " + path("d.exr") + " --screenshot " + path("s.png") +
+                    " --keys 's@11'");
+    expectClean(v);
+    EXPECT_NE(v.out.find("parameter   primitives[1].transform.position[1] = 1"), std::string::npos) << v.out;
+    Image8 shot = readPng(path("s.png"));
+    ASSERT_EQ(shot.width, 32);
+    EXPECT_GT(shot.at(16, 16, 2), shot.at(16, 16, 0) + 50) << "under the light the derivative is negative: blue";
+    int red = 0;
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) red += shot.at(x, y, 0) > shot.at(x, y, 2);
+    EXPECT_GT(red, 0) << "beyond sqrt(2) z it is positive: red";
+    const std::string saved = path("d.exr");
+    ASSERT_TRUE(fs::exists(saved)) << v.err;
+    EXPECT_EQ(exrAttribute(saved, "telescope:derivative_key"), "primitives[1].transform.position[1]");
+    EXPECT_EQ(exrAttribute(saved, "telescope:spp"), "6");
+    ASSERT_EQ(telescope("render " + scene + " " + args + " --spp 6 -q -o " + path("r.exr")).exitCode, 0);
+    EXPECT_LT(maxRelativeDifference(saved, path("r.exr")), 1e-6);
+}

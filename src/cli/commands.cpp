@@ -102,6 +102,14 @@ DerivativeSettings derivativeSettings(const DerivativeCli& d) {
     return s;
 }
 
+std::vector<std::pair<std::string, std::string>> derivativeMetadata(const DerivativeRenderer& r) {
+    const DerivativeParameter& p = r.parameter();
+    return {{"telescope:derivative_key", p.key},
+            {"telescope:derivative_value", fmt::format("{:.17g}", p.value)},
+            {"telescope:derivative_step", fmt::format("{:.17g}", p.step)},
+            {"telescope:derivative_estimator", derivativeEstimatorName(r.settings().estimator)}};
+}
+
 // ---- Shared with the viewer (cli/outputs.h) ----
 
 void reportIgnoredKeys(const Scene& scene, bool quiet) {
@@ -316,10 +324,7 @@ int runDerivativeRender(const CommonOptions& common, const RenderOptions& option
     const DerivativeParameter& p = renderer.parameter();
     OutputInfo info{scene.path, scene.document.dump(), renderer.description(), context.info().name,
                     resolvedSettings(scene).dump(), o.seed, 0.0};
-    info.extra = {{"telescope:derivative_key", p.key},
-                  {"telescope:derivative_value", fmt::format("{:.17g}", p.value)},
-                  {"telescope:derivative_step", fmt::format("{:.17g}", p.step)},
-                  {"telescope:derivative_estimator", derivativeEstimatorName(settings.estimator)}};
+    info.extra = derivativeMetadata(renderer);
 
     RenderRequest request;
     request.timeLimit = o.timeLimit;

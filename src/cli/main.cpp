@@ -184,6 +184,7 @@ int main(int argc, char** argv) {
                      "standard_error");
     view->add_option("--frames", viewOptions.frames, "Scripting: exit after this many frames")->check(CLI::PositiveNumber);
     view->add_option("--screenshot", viewOptions.screenshot, "Scripting: PNG of the window as last presented, on exit");
+    addDerivative(view, viewOptions.derivative);
     view->add_option("--keys", viewOptions.keys,
                      "Scripting: input events KEY@FRAME,... (keys as named in the README; drag:DX:DY, pan:DX:DY, "
                      "scroll:N)");

@@ -9,12 +9,17 @@
 #include "cli/commands.h"
 #include "gpu/context.h"
 #include "render/film.h"
+#include "render/derivative.h"
 #include "render/film_io.h"
 #include "scene/scene.h"
 
 namespace telescope::cli {
 
 void reportIgnoredKeys(const Scene& scene, bool quiet);
+// --derivative and its options as settings; throws InputError naming the option.
+DerivativeSettings derivativeSettings(const DerivativeCli& d);
+// A derivative render's EXR metadata beyond OutputInfo's (the parameter, its value, h_0).
+std::vector<std::pair<std::string, std::string>> derivativeMetadata(const DerivativeRenderer& r);
 gpu::ContextOptions contextOptions(const CommonOptions& o);
 
 // Throw InputError naming the option when a path has the wrong extension or no directory.

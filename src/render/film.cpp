@@ -42,3 +42,18 @@ void Film::merge(const Film& other) {
 }
 
 }  // namespace telescope
+
+namespace telescope {
+
+std::vector<glm::vec4> Film::compensatedPairs() const {
+    std::vector<glm::vec4> raw(pixelCount() * shader::kChannelCount * 2);
+    for (uint32_t c = 0; c < shader::kChannelCount; ++c)
+        for (size_t i = 0; i < pixelCount(); ++i) {
+            const size_t k = (c * pixelCount() + i) * 2;
+            raw[k] = glm::vec4(sums_[c][i]);
+            raw[k + 1] = glm::vec4(sums_[c][i] - glm::dvec4(raw[k]));
+        }
+    return raw;
+}
+
+}  // namespace telescope

@@ -47,6 +47,10 @@ public:
     // Adds another film's samples (same size).
     void merge(const Film& other);
 
+    // The sums as the device's accumulation holds them (shared/gpu_types.h): a (hi, lo) float
+    // pair per channel and pixel, hi + lo the double sum to about 2^-48 of it.
+    std::vector<glm::vec4> compensatedPairs() const;
+
 private:
     uint32_t width_ = 0, height_ = 0;
     uint64_t spp_ = 0;

@@ -226,16 +226,7 @@ void Renderer::resume(const Film& film) {
     if (film.samplesPerPixel() >= (uint64_t(1) << 32))
         throw std::invalid_argument("cannot resume: the sample index would overflow 32 bits");
     // Each double sum becomes a (hi, lo) float pair, as the compensated accumulation keeps it.
-    std::vector<glm::vec4> raw(film.pixelCount() * shader::kChannelCount * 2);
-    for (uint32_t c = 0; c < shader::kChannelCount; ++c) {
-        const auto& sums = film.sums(c);
-        for (size_t i = 0; i < film.pixelCount(); ++i) {
-            size_t k = (c * film.pixelCount() + i) * 2;
-            raw[k] = glm::vec4(sums[i]);
-            raw[k + 1] = glm::vec4(sums[i] - glm::dvec4(raw[k]));
-        }
-    }
-    accum_.upload(raw);
+    accum_.upload(film.compensatedPairs());
     sampleIndex_ = film.samplesPerPixel();
     stats_.samplesPerPixel = sampleIndex_;
 }

@@ -18,6 +18,8 @@
 #include "cli/outputs.h"
 #include "core/error.h"
 #include "gpu/context.h"
+#include "render/derivative.h"
+#include "render/image_output.h"
 #include "render/renderer.h"
 #include "scene/settings_json.h"
 #include "scene/scene_loader.h"
@@ -54,7 +56,9 @@ void installStopHandlers() {
 const char* kChannelNames[shader::kViewChannelCount] = {"estimate", "base", "correction", "correction_positive",
                                                         "correction_negative", "standard_error"};
 
-uint32_t channelMap(uint32_t channel) {
+// Derivative images are signed in their estimate and base too.
+uint32_t channelMap(uint32_t channel, bool derivative = false) {
+    if (derivative && (channel == shader::kViewEstimate || channel == shader::kViewBase)) return shader::kViewMapSigned;
     if (channel == shader::kViewCorrection) return shader::kViewMapSigned;
     if (channel == shader::kViewStandardError) return shader::kViewMapHeat;
     return shader::kViewMapTone;
@@ -69,7 +73,7 @@ const char* kHelp =
 
 // The displayed quantity of a channel at a pixel, for fitting the exposure: the largest colour
 // component (tone-mapped channels) or the luminance (false colour).
-double displayValue(const Film& film, uint32_t channel, size_t i) {
+double displayValue(const Film& film, uint32_t channel, size_t i, bool derivative) {
     using namespace shader;
     glm::dvec3 v;
     switch (channel) {
@@ -80,7 +84,7 @@ double displayValue(const Film& film, uint32_t channel, size_t i) {
         case kViewCorrectionNegative: v = -film.mean(kChannelCorrectionNegative, i); break;
         default: v = glm::sqrt(film.varianceOfMean(i)); break;
     }
-    if (channelMap(channel) == kViewMapTone) return std::max({v.x, v.y, v.z});
+    if (channelMap(channel, derivative) == kViewMapTone) return std::max({v.x, v.y, v.z});
     return std::abs(0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z);
 }
 
@@ -121,9 +125,11 @@ public:
         camera_ = home_;
         channel_ = uint32_t(channelFromName(options.channel));
         script_ = parseInputScript(options.keys);
+        if (derivativeMode()) derivativeSettings_ = cli::derivativeSettings(options.derivative);
         restart(false);
         if (!quiet_) {
-            fmt::print("{}", describePlan(*scene_, renderer_->plan()));
+            fmt::print("{}", describePlan(*scene_, derivative_ ? derivative_->renderer().plan() : renderer_->plan()));
+            if (derivative_) fmt::print("{}", derivative_->planText());
             fmt::print(stderr, "{}", kHelp);
         }
     }
@@ -179,7 +185,12 @@ private:
                        samples());
     }
 
-    uint64_t samples() const { return renderer_->stats().samplesPerPixel; }
+    uint64_t samples() const {
+        return derivative_ ? derivative_->film().samplesPerPixel() : renderer_->stats().samplesPerPixel;
+    }
+    bool derivativeMode() const { return !options_.derivative.key.empty(); }
+    uint32_t map() const { return channelMap(channel_, derivativeMode()); }
+    Film film() const { return derivative_ ? derivative_->film() : renderer_->film(); }
     bool done() const { return options_.spp && samples() >= options_.spp; }
 
     // Accumulation starts again for the current camera (an unbiased render never mixes samples
@@ -190,14 +201,25 @@ private:
         moved_ = moved_ || cameraChanged;
         const Camera camera = moved_ ? camera_.apply(sceneAsLoaded_.camera) : sceneAsLoaded_.camera;
         const auto start = Clock::now();
-        bool inPlace = renderer_ && renderer_->restartWithCamera(camera);
+        bool inPlace = !derivativeMode() && renderer_ && renderer_->restartWithCamera(camera);
         if (!inPlace) {
             renderer_.reset();
             scene_ = std::make_unique<Scene>(sceneAsLoaded_);
         }
         scene_->camera = camera;
         if (moved_) scene_->document["camera"]["transform"] = camera_.transformJson();
-        if (!inPlace) renderer_ = std::make_unique<Renderer>(context_, *scene_, options_.seed);
+        if (derivativeMode()) {
+            // A derivative render reads its versions from the document (the moved camera too):
+            // a new one per camera, with its own Renderer.
+            derivative_.reset();
+            derivative_ = std::make_unique<DerivativeRenderer>(context_, *scene_, derivativeSettings_, options_.seed);
+            derivativeAccum_ = gpu::Buffer(context_, derivative_->film().compensatedPairs().size() * sizeof(glm::vec4),
+                                           "derivative display");
+            derivativeAccum_.fill(0);
+            inPlace = false;
+        } else if (!inPlace) {
+            renderer_ = std::make_unique<Renderer>(context_, *scene_, options_.seed);
+        }
         restartTime_ = Clock::now();
         renderSeconds_ = 0.0;
         batchSpp_ = 1;
@@ -214,7 +236,12 @@ private:
         RenderRequest request;
         request.spp = n;
         const auto start = Clock::now();
-        renderer_->render(request);
+        if (derivative_) {
+            derivative_->render(request);
+            derivativeAccum_.upload(derivative_->film().compensatedPairs());  // shown by the same display pass
+        } else {
+            renderer_->render(request);
+        }
         const double seconds = secondsSince(start);
         renderSeconds_ += seconds;
         const double perSample = seconds / double(n);
@@ -225,7 +252,7 @@ private:
 
     // The false-colour channels fit their scale once, when first shown with samples.
     void autoFit() {
-        if (channelMap(channel_) != shader::kViewMapTone && !fitted_[channel_] && samples() > 0) fit();
+        if (map() != shader::kViewMapTone && !fitted_[channel_] && samples() > 0) fit();
     }
 
     bool show(std::vector<uint8_t>* capture) {
@@ -243,9 +270,10 @@ private:
         push.imageY = int(std::floor((areaH - cam.height * scale) / 2));
         push.samples = uint32_t(samples());
         push.channel = channel_;
-        push.map = channelMap(channel_);
+        push.map = map();
         push.scale = float(std::exp2(ev_[channel_]));
-        return presenter_.present(push, renderer_->accumulation().address(), win, capture);
+        const uint64_t accum = derivative_ ? derivativeAccum_.address() : renderer_->accumulation().address();
+        return presenter_.present(push, accum, win, capture);
     }
 
     std::string statusLine() const {
@@ -254,8 +282,8 @@ private:
         const double pixels = double(scene_->camera.width) * scene_->camera.height;
         std::string scale;
         const double fullScale = std::exp2(-ev_[channel_]);
-        if (channelMap(channel_) == shader::kViewMapSigned) scale = fmt::format("scale +-{:.3g} (red +, blue -)", fullScale);
-        else if (channelMap(channel_) == shader::kViewMapHeat) scale = fmt::format("scale 0..{:.3g}", fullScale);
+        if (map() == shader::kViewMapSigned) scale = fmt::format("scale +-{:.3g} (red +, blue -)", fullScale);
+        else if (map() == shader::kViewMapHeat) scale = fmt::format("scale 0..{:.3g}", fullScale);
         else scale = fmt::format("exposure {:+.1f} EV", ev_[channel_]);
         return fmt::format("{}, {} spp{}, {:.1f} spp/s ({:.2f} Mpaths/s), {:.1f} s, {}{}", channelName(channel_),
                            samples(), done() ? " (done)" : "", sppPerSecond, sppPerSecond * pixels * 1e-6, elapsed,
@@ -349,11 +377,11 @@ private:
     void fit() {
         fitted_[channel_] = true;
         if (samples() == 0) return;
-        const Film film = renderer_->film();
+        const Film film = this->film();
         std::vector<double> values;
         values.reserve(film.pixelCount());
         for (size_t i = 0; i < film.pixelCount(); ++i) {
-            double v = displayValue(film, channel_, i);
+            double v = displayValue(film, channel_, i, derivativeMode());
             if (std::isfinite(v)) values.push_back(v);
         }
         if (values.empty()) return;
@@ -366,10 +394,20 @@ private:
 
     // The EXR (and PNG, checkpoint) that `render` writes, with the samples shown.
     void save() {
-        const Film film = renderer_->film();
-        cli::writeImages(options_.output, film,
-                         {scene_->path, scene_->document.dump(), renderer_->plan().estimator, context_.info().name,
-                          resolvedSettings(*scene_).dump(), options_.seed, renderSeconds_});
+        const Film film = this->film();
+        cli::OutputInfo info{scene_->path,         scene_->document.dump(),
+                             derivative_ ? derivative_->description() : renderer_->plan().estimator,
+                             context_.info().name, resolvedSettings(*scene_).dump(),
+                             options_.seed,        renderSeconds_};
+        if (derivative_) {
+            info.extra = cli::derivativeMetadata(*derivative_);
+            cli::ImageOutputOptions exr = options_.output;
+            exr.noPng = true;  // signed false colour instead
+            cli::writeImages(exr, film, info);
+            if (!options_.output.noPng) writeSignedPngPreview(options_.output.pngPath, film);
+        } else {
+            cli::writeImages(options_.output, film, info);
+        }
         if (!quiet_) fmt::print(stderr, "view: saved {} ({} spp)\n", options_.output.exrPath, film.samplesPerPixel());
     }
 
@@ -381,6 +419,10 @@ private:
     const bool quiet_;
     std::unique_ptr<Scene> scene_;
     std::unique_ptr<Renderer> renderer_;
+    // --derivative: the derivative render, and its film in the accumulation's layout for display.
+    DerivativeSettings derivativeSettings_;
+    std::unique_ptr<DerivativeRenderer> derivative_;
+    gpu::Buffer derivativeAccum_;
     std::vector<ScriptedInput> script_;
     OrbitCamera home_, camera_;
     bool moved_ = false, cameraMoved_ = false, paused_ = false;
@@ -507,6 +549,7 @@ int runView(const cli::CommonOptions& common, const ViewOptions& optionsIn) {
                          fmt::format("unknown channel '{}' (estimate, base, correction, correction_positive, "
                                      "correction_negative, standard_error)",
                                      o.channel));
+    if (!o.derivative.key.empty()) (void)cli::derivativeSettings(o.derivative);  // options checked before the window
     if (o.output.exrPath.empty()) o.output.exrPath = fs::path(common.scenePath).stem().string() + "-view.exr";
     cli::checkImageOutputs(o.output);
     if (!o.screenshot.empty()) cli::checkOutputPath(o.screenshot, "--screenshot", ".png");

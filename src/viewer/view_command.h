@@ -19,6 +19,7 @@ struct ViewOptions {
     std::string screenshot;    // scripting: PNG of the window as presented last
     std::string keys;          // scripting: input events, "KEY@FRAME,..." (see parseInputScript)
     std::string channel = "estimate";  // the channel shown first
+    cli::DerivativeCli derivative;     // --derivative KEY: show the derivative image (docs/DERIVATIVES.md)
 };
 
 // A scripted input event: at the start of frame `frame` (1-based), before it renders.
