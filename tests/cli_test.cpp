@@ -478,6 +478,10 @@ TEST_F(Cli, DerivativePlanAndMetadata) {
                   out("b.ckpt")).exitCode, 0);
     ASSERT_EQ(run("render " + d + " --spp 5 -o " + out("c.exr") + " --checkpoint " + out("c.ckpt")).exitCode, 0);
     EXPECT_TRUE(telescope::test::sameSums(loadCheckpoint(out("b.ckpt")).film, loadCheckpoint(out("c.ckpt")).film));
+    // `reference --derivative` continues from its checkpoint when run again.
+    for (int i = 0; i < 2; ++i)
+        ASSERT_EQ(run("reference " + d + " --spp 2 -o " + out("ref.exr")).exitCode, 0);
+    EXPECT_EQ(telescope::test::exrStringAttributes(out("ref.exr")).at("telescope:spp"), "4");
     // A radiance render's checkpoint is not a derivative's.
     ASSERT_EQ(run("render " + plane + " -q --no-png --spp 1 -o " + out("r.exr") + " --checkpoint " + out("r.ckpt")).exitCode, 0);
     CommandResult mixed = run("render " + d + " --spp 1 -o " + out("m.exr") + " --resume " + out("r.ckpt"));

@@ -452,6 +452,21 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
     Scene scene = loadWithOverrides(common);
     const UnbiasedSetup setup = unbiasedSetup(scene);
     scene.integrator = setup.integrator;
+    if (!o.derivative.key.empty()) {
+        // Each evaluation unbiased (as above), the derivative by the chosen estimator, resumable
+        // through the same checkpoint: a derivative render that checkpoints every interval.
+        RenderOptions r;
+        r.derivative = o.derivative;
+        r.output = o.output;
+        r.spp = o.spp;
+        r.timeLimit = o.timeLimit;
+        r.seed = o.seed;
+        r.seedGiven = true;
+        r.checkpointEvery = o.checkpointInterval;
+        if (fs::exists(o.output.checkpointPath)) r.resumePath = o.output.checkpointPath;
+        if (!common.quiet) fmt::print(stderr, "reference: {}\n", setup.why);
+        return runDerivativeRender(common, r, scene);
+    }
     checkImageOutputs(o.output);
     std::optional<Checkpoint> resume;
     if (fs::exists(o.output.checkpointPath)) {

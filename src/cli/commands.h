@@ -48,6 +48,7 @@ struct RenderOptions {
 };
 
 struct ReferenceOptions {
+    DerivativeCli derivative;   // --derivative KEY: a resumable derivative reference
     ImageOutputOptions output;  // checkpoint defaults to OUT.exr.checkpoint
     uint64_t spp = 0;
     double timeLimit = 0.0;

@@ -87,6 +87,7 @@ int main(int argc, char** argv) {
     addImageOutput(reference, referenceOptions.output, "Checkpoint file (default: OUT.exr.checkpoint)");
     addBudget(reference, referenceOptions.spp, referenceOptions.timeLimit, "Samples per pixel to add", "Seconds to add");
     reference->add_option("--seed", referenceOptions.seed, "Random seed");
+    addDerivative(reference, referenceOptions.derivative);
     reference->add_option("--checkpoint-every,--checkpoint-interval", referenceOptions.checkpointInterval,
                           "Seconds between checkpoints (default 30)")
         ->check(CLI::PositiveNumber);
