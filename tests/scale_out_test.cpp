@@ -168,3 +168,21 @@ TEST_F(ScaleOut, AShardPlanRefusesAnAutoPmf) {
                       " --shards 2 --spp-per-shard 1 -o " + out("plan"),
                   {"scene.json", "integrator.debias.pmf.type"});
 }
+
+// Derivative images scale out the same way: each shard a derivative render of its seed, the merge
+// equal to the plain derivative renders of the same seeds; an auto pmf (per-shard pilots) refused.
+TEST_F(ScaleOut, DerivativeShardsMergeToThePlainDerivativeRenders) {
+    const std::string d = " --derivative 'primitives[7].emission[0]'";
+    const std::string dir = out("plan");
+    expectRefused("shard " + scene() + kSmall + d + " --derivative-pmf '{\"type\":\"auto\"}' --shards 2 --spp-per-shard 1 -o " + dir,
+                  {"--derivative-pmf", "auto"});
+    CommandResult r = run("shard " + scene() + kSmall + d + " --shards 2 --spp-per-shard 2 --seed 21 -o " + dir);
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    for (const char* task : {"0", "1"}) ASSERT_EQ(run("shard-render " + dir + " --task " + task + " -q").exitCode, 0);
+    r = run("shard-merge " + dir + " -q --no-png -o " + out("m.exr") + " --checkpoint " + out("m.ckpt"));
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    for (uint32_t i = 0; i < 2; ++i) render(21 + i, 2, "plain" + std::to_string(i), d);
+    EXPECT_TRUE(sameSums(loadCheckpoint(out("m.ckpt")).film, sumInSeedOrder({out("plain0.ckpt"), out("plain1.ckpt")})));
+    EXPECT_NE(exrStringAttributes(out("m.exr"))["telescope:estimator"].find("derivative d/d(primitives[7].emission[0])"),
+              std::string::npos);
+}

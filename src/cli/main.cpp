@@ -111,6 +111,7 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber)
         ->excludes(shardSpp);
     shard->add_option("--seed", shardOptions.seed, "Base seed: shard i renders seed SEED + i");
+    addDerivative(shard, shardOptions.derivative);
     shard->add_option("-o,--output", shardOptions.outDir, "Directory for the plan, the shards and their checkpoints")
         ->required();
     ShardRenderOptions shardRenderOptions;

@@ -1,6 +1,7 @@
 #include "cli/shard.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -55,6 +56,7 @@ struct ShardPlan {
     uint64_t sppPerShard = 0;
     double timePerShard = 0.0;
     uint32_t baseSeed = 0;
+    DerivativeCli derivative;  // key empty: radiance
 
     std::string checkpoint(const std::string& dir, uint32_t i) const {
         return (fs::path(dir) / fmt::format("shard-{}.checkpoint", i)).string();
@@ -84,6 +86,14 @@ ShardPlan readPlan(const std::string& dir) {
         p.sppPerShard = j.at("spp_per_shard").get<uint64_t>();
         p.timePerShard = j.at("time_per_shard").get<double>();
         p.baseSeed = j.at("base_seed").get<uint32_t>();
+        if (j.contains("derivative")) {
+            const auto& d = j.at("derivative");
+            p.derivative.key = d.at("key").get<std::string>();
+            if (!d.at("step").is_null()) p.derivative.step = d.at("step").get<double>();
+            p.derivative.estimator = d.at("estimator").get<std::string>();
+            p.derivative.levels = d.at("levels").get<uint32_t>();
+            p.derivative.pmf = d.at("pmf").get<std::string>();
+        }
     } catch (const nlohmann::json::exception& e) {
         throw InputError(path, "", fmt::format("not a shard plan: {}", e.what()));
     }
@@ -191,6 +201,10 @@ int runShardPlan(const CommonOptions& common, const ShardPlanOptions& o) {
         throw InputError(scene.path, "integrator.debias.pmf.type",
                          "pmf \"auto\" would let every shard pick its own pmf, and shards of other settings do not "
                          "merge: put a pmf in the scene ('telescope render' prints the one its pilot picks)");
+    if (!o.derivative.key.empty() && derivativeSettings(o.derivative).autoPmf)
+        throw InputError("", "--derivative-pmf", "pmf \"auto\" would let every shard pick its own pmf, and shards of "
+                                                 "other estimators do not merge: give the pmf ('telescope plan "
+                                                 "--derivative' prints the one its pilot picks)");
     fs::path dir(o.outDir);
     fs::path parent = dir.parent_path().empty() ? fs::path(".") : dir.parent_path();
     if (!fs::is_directory(parent))
@@ -210,6 +224,14 @@ int runShardPlan(const CommonOptions& common, const ShardPlanOptions& o) {
     j["time_per_shard"] = o.timePerShard;
     j["base_seed"] = o.seed;
     j["seeds"] = fmt::format("{} + task id (0..{})", o.seed, o.shards - 1);
+    if (!o.derivative.key.empty()) {
+        const DerivativeCli& d = o.derivative;
+        j["derivative"] = {{"key", d.key},
+                           {"step", std::isnan(d.step) ? nlohmann::json() : nlohmann::json(d.step)},
+                           {"estimator", d.estimator},
+                           {"levels", d.levels},
+                           {"pmf", d.pmf}};
+    }
     writeTextAtomically(planPath(o.outDir), j.dump(2) + "\n");
     const std::string budget =
         o.sppPerShard ? fmt::format("{} spp", o.sppPerShard) : fmt::format("{} s", o.timePerShard);
@@ -253,6 +275,7 @@ int runShardRender(const CommonOptions& commonIn, const ShardRenderOptions& o) {
     }
 
     RenderOptions r;
+    r.derivative = plan.derivative;
     r.output.exrPath = plan.exr(o.dir, uint32_t(task));
     r.output.noPng = true;
     r.output.checkpointPath = plan.checkpoint(o.dir, uint32_t(task));

@@ -22,6 +22,7 @@
 namespace telescope::cli {
 
 struct ShardPlanOptions {
+    DerivativeCli derivative;  // --derivative KEY: every shard renders the derivative image
     uint32_t shards = 0;
     uint64_t sppPerShard = 0;
     double timePerShard = 0.0;
