@@ -26,6 +26,7 @@ layout(constant_id = kSpecCameraMedium) const uint kCameraMedium = 0u;
 layout(constant_id = kSpecHasGrids) const bool kHasGrids = false;
 layout(constant_id = kSpecTrModel) const uint kSceneTrModel = 0xffffffffu;
 layout(constant_id = kSpecHasInhomogeneousMedia) const bool kHasInhomogeneous = true;
+layout(constant_id = kSpecTrPilot) const bool kTrPilot = false;
 
 layout(std430, binding = kBindingMedia) readonly buffer MediaBuffer { MediumGpu media[]; };
 layout(std140, binding = kBindingMediaUniform) uniform MediaUniform { MediumGpu uniformMedia[kMaxUniformMedia]; };
@@ -153,9 +154,15 @@ TrSegment mediumSegment(uint mi, vec3 o, vec3 d, float l) {
     return s;
 }
 
+// The transmittance pmf pilot (render/pmf_pilot.h) fixes debiased marching's level at
+// m = pc.pilotLevel and weights the correction by 1 or 2 (kTrPilotHalfWeight): the difference of
+// the two renders is the path's unweighted correction.
 TrEstimator sceneTrEstimator() {
-    return TrEstimator(kTrEstimatorType, kTrLevel, LevelPmf(kTrPmfType, kTrPmfR, kTrPmfAlpha), kTrTaylorTerms,
-                       kTrTaylorPoints);
+    LevelPmf pmf = LevelPmf(kTrPmfType, kTrPmfR, kTrPmfAlpha);
+    if (kTrPilot)
+        pmf = LevelPmf(kPmfFixed, float(pc.pilotLevel & ~kTrPilotHalfWeight),
+                       (pc.pilotLevel & kTrPilotHalfWeight) != 0u ? 0.5 : 1.0);
+    return TrEstimator(kTrEstimatorType, kTrLevel, pmf, kTrTaylorTerms, kTrTaylorPoints);
 }
 
 // ---- Trackers through the majorant grid ----

@@ -12,13 +12,20 @@
 // level does not.
 //
 // Finite variance: every estimate here lies in [0, 1] except debiased marching's, whose
-// correction has E[D_j^2] ~ 4^-j for a smooth density against p(j) ~ 0.35^j (default r = 0.65).
+// correction g(tau_all) - (g(tau_even) + g(tau_odd)) / 2 is a second difference: O(4^-j) for a
+// smooth density, E[D_j^2] ~ 16^-j against p(j) ~ 0.35^j (default r = 0.65).
+//
+// The transmittance pmf pilot ("auto") measures, per level, the weighted E[D_j^2] of the slab's
+// pixels; the test computes the same from the slab's density along each pixel's ray by quadrature
+// over the comb offset (the estimate's only random number here), on the CPU, independently of
+// the shader's combs.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <string>
 
 #include "region_stats.h"
+#include "render/pmf_pilot.h"
 #include "render_harness.h"
 #include "shared/transmittance.h"
 #include "slab_closed_form.h"
@@ -192,4 +199,94 @@ TEST_F(MediaRender, ConstantAndLinearGridsMatchTheSlabClosedForm) {
     ZSummary zb = compareToClosedForm(blockMeans(b, kBlock), slabClosedForm(scene, exponentialModel().model));
     std::printf("2-point marching on the linear grid: %zu of %zu tests fail (worst %s)\n", zb.failing, zb.tests, zb.worst.c_str());
     EXPECT_GE(zb.failing, 24u) << "2-point marching is biased on both halves: " << zb.worst;
+}
+
+namespace {
+
+// The weighted second moment the transmittance pilot measures at level m (PmfPilotResult) for
+// absorbing-slab.json with exponential transmittance and debiased marching at base level k:
+// the mean over pixels of E_u[D_j(u)^2] / (E_u[B_k(u)]^2 + 1e-2), j = k + m, where for a ray with
+// density d(t) over [0, L] and a comb of n = 2^(j+1) points at L (u + i) / n,
+//   tau_even / tau_odd: the even / odd points (2^j each), tau_all = (tau_even + tau_odd) / 2,
+//   D_j = g(tau_all) - (g(tau_even) + g(tau_odd)) / 2,   g(tau) = exp(-tau),
+// and the base B_k = mean over the two combs of 2^k points of level k of g(their tau).
+// The top slab (constant density) has D = 0: every comb gives the exact tau.
+double slabPilotMoment(const Scene& scene, uint32_t k, uint32_t m) {
+    const Camera& cam = scene.camera;
+    const double w = cam.width, h = cam.height;
+    const double plane = 1.0 / std::tan(0.5 * cam.fovDegrees * 3.14159265358979323846 / 180.0);
+    constexpr int kOffsets = 256;  // midpoint quadrature over u in [0, 1)
+    auto combTau = [](double cosZ, double length, double u, uint32_t points, double offset, double spacing) {
+        // points at length (u + offset + i spacing) / (points spacing), i < points
+        double sum = 0.0;
+        const double n = double(points) * spacing;
+        for (uint32_t i = 0; i < points; ++i) sum += 3.0 * std::exp(-3.0 * cosZ * length * (u + offset + i * spacing) / n);
+        return sum * length / double(points);
+    };
+    double total = 0.0;
+    for (uint32_t y = 0; y < cam.height; ++y)
+        for (uint32_t x = 0; x < cam.width; ++x) {
+            const double lx = -1.0 + 2.0 * (x + 0.5) / w, ly = h / w - 2.0 * (y + 0.5) / w;
+            const double cosZ = plane / std::sqrt(lx * lx + ly * ly + plane * plane);
+            double base = 0.0, d2 = 0.0;
+            if (ly > 0) {
+                base = std::exp(-test::kSlabTauConstant / cosZ);
+            } else {
+                const double length = 1.0 / cosZ;
+                for (int q = 0; q < kOffsets; ++q) {
+                    const double u = (q + 0.5) / kOffsets;
+                    // level k base: the two sub-combs of 2^k points (even and odd of 2^(k+1))
+                    const double b0 = combTau(cosZ, length, u, 1u << k, 0.0, 2.0);
+                    const double b1 = combTau(cosZ, length, u, 1u << k, 1.0, 2.0);
+                    base += 0.5 * (std::exp(-b0) + std::exp(-b1)) / kOffsets;
+                    const uint32_t j = k + m;
+                    const double even = combTau(cosZ, length, u, 1u << j, 0.0, 2.0);
+                    const double odd = combTau(cosZ, length, u, 1u << j, 1.0, 2.0);
+                    const double d = std::exp(-0.5 * (even + odd)) - 0.5 * (std::exp(-even) + std::exp(-odd));
+                    d2 += d * d / kOffsets;
+                }
+            }
+            total += d2 / (base * base + 1e-2) / (w * h);
+        }
+    return total;
+}
+
+}  // namespace
+
+// The transmittance pilot against the quadrature above, level by level, within its own
+// statistical error (the spread over pixels, four standard errors) plus 3% for the weights (the
+// pilot weights pixels by its sampled base). Positive controls, rejected by the same bound: the
+// level off by one (E[D^2] falls ~16x per level) and a correction weighted by 2 (4x).
+TEST_F(MediaRender, TransmittancePilotMeasuresTheMarchingCorrection) {
+    Scene scene = slabScene(exponentialModel(), R"({"type":"debiased_ray_march","level":1,
+                                                     "pmf":{"type":"auto","pilot_spp":8,"pilot_levels":4}})");
+    ASSERT_EQ(scene.integrator.transmittance.pmf.type, PmfType::Auto);
+    const PmfPilotResult pilot = runTransmittancePmfPilot(sharedContext(), scene, 61);
+    ASSERT_EQ(pilot.levels.size(), 4u);
+    std::vector<double> quadrature;
+    for (uint32_t m = 0; m <= 4; ++m) quadrature.push_back(slabPilotMoment(scene, 1, m));
+    for (uint32_t m = 0; m < 4; ++m) {
+        const PilotLevel& l = pilot.levels[m];
+        const double bound = 4.0 * l.relativeError + 0.03;
+        const double expected = quadrature[m];
+        std::printf("level %u: pilot E[D^2] %.5g +- %.3f, quadrature %.5g (ratio %.4f); off by one %.5g\n", m,
+                    l.secondMoment, l.relativeError, expected, l.secondMoment / expected, quadrature[m + 1]);
+        EXPECT_LT(std::abs(l.secondMoment / expected - 1.0), bound) << "level " << m;
+        EXPECT_GT(std::abs(l.secondMoment / quadrature[m + 1] - 1.0), bound) << "control: level " << m + 1;
+        EXPECT_GT(std::abs(l.secondMoment / (4.0 * expected) - 1.0), bound) << "control: weighted by 2 at level " << m;
+        EXPECT_DOUBLE_EQ(l.raysPerPath, double(1u << (1 + m + 1)));  // points per estimate, 2^(j+1)
+    }
+    // The chosen pmf predicts no more work x variance than the default it replaces.
+    EXPECT_LE(pilot.chosen.product(), pilot.geometricDefault.product());
+    std::printf("%s", pilot.summary().c_str());
+
+    // "auto" through resolveAutoPmfs (a short pilot): the pmf becomes a fixed one the renderer takes.
+    Scene resolved = scene;
+    resolved.integrator.transmittance.pmf.pilotSpp = 2;
+    resolved.integrator.transmittance.pmf.pilotLevels = 3;
+    const auto pilots = resolveAutoPmfs(sharedContext(), resolved, 62);
+    ASSERT_EQ(pilots.size(), 1u);
+    EXPECT_EQ(pilots[0].kind, PilotKind::Transmittance);
+    EXPECT_NE(resolved.integrator.transmittance.pmf.type, PmfType::Auto);
+    EXPECT_NE(resolved.integrator.transmittance.pmf.origin.find("auto pilot"), std::string::npos);
 }

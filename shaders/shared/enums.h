@@ -95,6 +95,7 @@ CONST uint kTrEstCount = 7u;
 // ---- Level pmfs (PmfType; "auto" is resolved on the host before any pass sees it) ----
 CONST uint kPmfGeometric = 0u;
 CONST uint kPmfPowerLaw = 1u;
+CONST uint kPmfFixed = 2u;  // shader only, the transmittance pilot: level r, probability alpha
 
 // ---- Path-depth debiasing (DebiasEstimator) ----
 CONST uint kDebiasNone = 0u;

@@ -216,6 +216,8 @@ CONST uint kMaxBruteForcePrims = 20u;     // the largest scene traced that way (
 CONST uint kSpecTrTaylorTerms = 43u;     // taylor: terms evaluated before the roulette
 CONST uint kSpecTrTaylorPoints = 44u;    // taylor: points of each factor's comb (0: from the density bounds)
 CONST uint kSpecRoulette = 45u;          // Russian roulette on path throughput (off in derivative renders)
+CONST uint kSpecTrPilot = 46u;          // transmittance pmf pilot: debiased marching at the level pc.pilotLevel
+CONST uint kTrPilotHalfWeight = 0x80000000u;  // that pilot's pc.pilotLevel bit: the correction weighted by 2, not 1
 
 CONST uint kPathTraceGroupSize = 8u;  // 8x8 pixel tiles
 

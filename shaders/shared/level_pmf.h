@@ -4,6 +4,8 @@
 //   geometric:  p(m) = r (1-r)^m,                      P(M >= m) = (1-r)^m
 //   power law:  P(M >= m) = (m+1)^(alpha-1),           p(m) = P(M >= m) - P(M >= m+1)
 // The power law is the photon-mapping schedule of section 3 with j = m + 1.
+//   fixed (kPmfFixed, the transmittance pmf pilot only): always level m = r, reported with the
+//               "probability" alpha (1 or 1/2), so the correction enters weighted by 1 / alpha.
 #ifndef TELESCOPE_LEVEL_PMF_H
 #define TELESCOPE_LEVEL_PMF_H
 
@@ -41,12 +43,14 @@ FN LevelPmf makeLevelPmf(uint type, float r, float alpha) {
 // P(M >= m).
 FN float levelTail(LevelPmf pmf, uint m) {
     if (m == 0u) return 1.0f;
+    if (pmf.type == kPmfFixed) return m <= uint(pmf.r) ? 1.0f : 0.0f;
     if (pmf.type == kPmfGeometric) return exp(float(m) * log1pSafe(-pmf.r));
     return pow(float(m) + 1.0f, pmf.alpha - 1.0f);
 }
 
 // P(M == m), computed without the cancellation of tail(m) - tail(m+1).
 FN float levelProbability(LevelPmf pmf, uint m) {
+    if (pmf.type == kPmfFixed) return m == uint(pmf.r) ? pmf.alpha : 0.0f;
     if (pmf.type == kPmfGeometric) return pmf.r * levelTail(pmf, m);
     float a = float(m) + 1.0f;
     // (m+1)^(alpha-1) * (1 - ((m+1)/(m+2))^(1-alpha))
@@ -55,6 +59,7 @@ FN float levelProbability(LevelPmf pmf, uint m) {
 
 // Inverts the tail: u uniform in [0, 1).
 FN uint levelSample(LevelPmf pmf, float u) {
+    if (pmf.type == kPmfFixed) return uint(pmf.r);
     float m;
     if (pmf.type == kPmfGeometric) {
         m = floor(log1pSafe(-u) / log1pSafe(-pmf.r));

@@ -301,8 +301,8 @@ int runDerivativeRender(const CommonOptions& common, const RenderOptions& option
     if (output.checkpointPath.empty() && o.checkpointEvery > 0) output.checkpointPath = output.exrPath + ".checkpoint";
     checkImageOutputs(output);
     if (!o.statsPath.empty()) checkOutputPath(o.statsPath, "--stats-json", ".json");
-    if (scene.integrator.debias.estimator != DebiasEstimator::None && scene.integrator.debias.pmf.type == PmfType::Auto)
-        throw InputError(scene.path, "integrator.debias.pmf.type",
+    if (const char* key = autoPmfKey(scene.integrator); *key)
+        throw InputError(scene.path, key,
                          "a derivative render needs a fixed pmf: put the one the pilot of a radiance render chose in the scene");
     std::optional<Checkpoint> resume;
     if (!o.resumePath.empty()) {
@@ -386,8 +386,8 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
     if (!o.statsPath.empty()) checkOutputPath(o.statsPath, "--stats-json", ".json");
     std::optional<Checkpoint> resume;
     if (!o.resumePath.empty()) {
-        if (scene.integrator.debias.estimator != DebiasEstimator::None && scene.integrator.debias.pmf.type == PmfType::Auto)
-            throw InputError(scene.path, "integrator.debias.pmf.type",
+        if (const char* key = autoPmfKey(scene.integrator); *key)
+            throw InputError(scene.path, key,
                              "a render with pmf \"auto\" cannot be resumed: put the pmf its pilot chose in the scene");
         resume = loadCheckpoint(o.resumePath);
         if (!o.seedGiven) o.seed = resume->seed;
@@ -398,8 +398,8 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
     // A runtime failure (device lost, out of memory) names the checkpoints it leaves (main.cpp).
     keepCheckpointsOnFailure({o.output.checkpointPath, o.resumePath});
     gpu::Context context(contextOptions(common));
-    PmfPilotResult pilot;
-    if (resolveAutoPmf(context, scene, o.seed, &pilot) && !common.quiet) fmt::print(stderr, "{}", pilot.summary());
+    for (const PmfPilotResult& pilot : resolveAutoPmfs(context, scene, o.seed))
+        if (!common.quiet) fmt::print(stderr, "{}", pilot.summary());
     Renderer renderer(context, scene, o.seed);
     if (resume) {
         checkSameEstimator(*resume, o.resumePath, renderer);
@@ -627,6 +627,20 @@ int runPlan(const CommonOptions& common, const DerivativeCli& derivative) {
     }
     GpuScene gpuScene = buildGpuScene(scene);
     fmt::print("{}", describePlan(scene, makeRenderPlan(scene, gpuScene.features)));
+    if (*autoPmfKey(scene.integrator)) {
+        // pmf "auto": plan runs the pilots a render would run (they need the device) and prints
+        // what they measured, the pmf they chose and its predicted work x variance.
+        gpu::Context context(contextOptions(common));
+        Scene resolved = scene;
+        const std::vector<PmfPilotResult> pilots = resolveAutoPmfs(context, resolved, kDefaultSeed);
+        fmt::print("pmf pilots (seed {}; a render runs them again with its own seed, and timings vary):\n", kDefaultSeed);
+        for (const PmfPilotResult& pilot : pilots) fmt::print("{}", pilot.summary());
+        if (scene.integrator.debias.pmf.type == PmfType::Auto && scene.integrator.debias.estimator != DebiasEstimator::None)
+            fmt::print("path-depth pmf: {}\n", pmfDescription(resolved.integrator.debias.pmf));
+        if (scene.integrator.transmittance.pmf.type == PmfType::Auto)
+            fmt::print("transmittance pmf: {}; {}\n", pmfDescription(resolved.integrator.transmittance.pmf),
+                       resolved.integrator.transmittance.pmf.origin);
+    }
     return 0;
 }
 

@@ -197,8 +197,8 @@ int runShardPlan(const CommonOptions& common, const ShardPlanOptions& o) {
     std::vector<SceneOverride> overrides;
     for (const auto& s : common.sets) overrides.push_back(parseOverride(s));
     Scene scene = loadScene(common.scenePath, overrides);
-    if (scene.integrator.debias.estimator != DebiasEstimator::None && scene.integrator.debias.pmf.type == PmfType::Auto)
-        throw InputError(scene.path, "integrator.debias.pmf.type",
+    if (const char* key = autoPmfKey(scene.integrator); *key)
+        throw InputError(scene.path, key,
                          "pmf \"auto\" would let every shard pick its own pmf, and shards of other settings do not "
                          "merge: put a pmf in the scene ('telescope render' prints the one its pilot picks)");
     if (!o.derivative.key.empty() && derivativeSettings(o.derivative).autoPmf)

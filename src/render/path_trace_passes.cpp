@@ -70,7 +70,19 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
                             fmt::format("pmf 'auto': before the render, {} spp at each of {} fixed levels measure the "
                                         "second moment and cost of the correction",
                                         in.debias.pmf.pilotSpp, in.debias.pmf.pilotLevels)});
-    if (plan.pilotLevel != kNoPilotLevel) {
+    if (f.media && in.transmittance.type == TransmittanceEstimatorType::DebiasedRayMarch &&
+        in.transmittance.pmf.type == PmfType::Auto)
+        plan.passes.insert(plan.passes.begin(),
+                           {"transmittance_pilot", "path_trace",
+                            fmt::format("transmittance pmf 'auto': before the render, {} spp at each of {} fixed marching "
+                                        "levels (correction weighted by 1 and by 2) measure the second moment and cost "
+                                        "of the correction",
+                                        in.transmittance.pmf.pilotSpp, in.transmittance.pmf.pilotLevels)});
+    if (plan.pilotLevel != kNoPilotLevel && plan.pilotKind == PilotKind::Transmittance) {
+        plan.estimator = fmt::format("transmittance pmf pilot: debiased ray marching at the fixed level j = k + {}, "
+                                     "k = {}, the correction weighted by 1 or 2", plan.pilotLevel & ~shader::kTrPilotHalfWeight,
+                                     in.transmittance.level);
+    } else if (plan.pilotLevel != kNoPilotLevel) {
         plan.estimator = fmt::format("pmf pilot: unweighted correction D_j at level j = k + {}, k = {}", plan.pilotLevel,
                                      pathDepthK(in));
     } else if (in.debias.estimator == DebiasEstimator::None) {
@@ -161,7 +173,8 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecCapLight, f.capLight},
         {kSpecMaxTraceDepth, std::max(shader::kTraceDepthCap, pathDepthK(in) + 1)},
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
-        {kSpecPilot, plan.pilotLevel != kNoPilotLevel},
+        {kSpecPilot, plan.pilotLevel != kNoPilotLevel && plan.pilotKind == PilotKind::PathDepth},
+        {kSpecTrPilot, plan.pilotLevel != kNoPilotLevel && plan.pilotKind == PilotKind::Transmittance},
         {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},
         {kSpecTestPmfWeight, gpu::specFloat(in.debias.testPmfWeight)},
         {kSpecSceneInUniforms, f.fitsUniforms},
@@ -228,7 +241,7 @@ public:
         push_.accumAddressLo = uint32_t(b.accum->address());
         push_.accumAddressHi = uint32_t(b.accum->address() >> 32);
         pixels_ = size_t(cam.width) * cam.height;
-        if (plan.pilotLevel != kNoPilotLevel) {
+        if (plan.pilotLevel != kNoPilotLevel && plan.pilotKind == PilotKind::PathDepth) {
             pilot_ = gpu::Buffer(context, pixels_ * shader::kPilotChannelCount * 2 * sizeof(glm::vec4), "pmf pilot sums");
             pilot_.fill(0);
             push_.pilotAddressLo = uint32_t(pilot_.address());
@@ -309,7 +322,7 @@ public:
     void setPilotLevel(uint32_t level) override {
         if (push_.pilotLevel == kNoPilotLevel) throw std::logic_error("setPilotLevel on a render that is not a pilot");
         push_.pilotLevel = level;
-        pilot_.fill(0);
+        if (pilot_.valid()) pilot_.fill(0);
     }
 
     PilotSums pilotSums(uint64_t samples) const override {

@@ -8,6 +8,7 @@
 
 #include "render/renderer.h"
 #include "shared/gpu_types.h"
+#include "shared/transmittance_estimators.h"
 
 namespace telescope {
 
@@ -92,15 +93,16 @@ double PilotModel::costAt(uint32_t m) const {
         // Increments shrink by raySurvival per level: rays.back() + d (s + s^2 + ... + s^n).
         const double d = rays.size() > 1 ? rays.back() - rays[rays.size() - 2] : 0.0;
         const double n = double(m - rays.size() + 1), s = raySurvival;
-        r += d * (s >= 1.0 ? n : s * -std::expm1(n * std::log(s)) / (1.0 - s));
+        r += d * (std::abs(s - 1.0) < 1e-12 ? n : s * -std::expm1(n * std::log(s)) / (1.0 - s));
     }
-    return costIntercept + costPerRay * std::min(r, double(shader::kTraceDepthCap));
+    return costIntercept + costPerRay * std::min(r, rayCap);
 }
 
 void fitPilotModel(PmfPilotResult& pilot) {
     PilotModel& model = pilot.model;
     model = PilotModel{};
     model.levelCap = pilot.levelCap;
+    model.rayCap = pilot.rayCap;
     const size_t n = pilot.levels.size();
     if (n == 0) return;
 
@@ -157,7 +159,8 @@ void fitPilotModel(PmfPilotResult& pilot) {
         if (d > 1e-9 * model.rays[i]) sx.push_back(double(i)), sy.push_back(std::log(d)), sone.push_back(1.0);
     }
     const Line survival = fitLine(sx, sy, sone);
-    model.raySurvival = survival.valid ? std::clamp(std::exp(survival.slope), 0.0, 1.0) : (sx.empty() ? 0.0 : 1.0);
+    model.raySurvival = survival.valid ? std::clamp(std::exp(survival.slope), 0.0, pilot.maxRaySurvival)
+                                       : (sx.empty() ? 0.0 : std::min(1.0, pilot.maxRaySurvival));
 }
 
 PmfCandidate predictPmf(const PmfPilotResult& pilot, const PmfSettings& pmf, DebiasEstimator estimator) {
@@ -227,6 +230,7 @@ PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t
     s.integrator.debias.estimator = DebiasEstimator::SingleTerm;
     s.integrator.debias.pmf = PmfSettings{};
     s.integrator.debias.schedule = LevelSchedule::PerPixel;
+    if (s.integrator.transmittance.pmf.type == PmfType::Auto) s.integrator.transmittance.pmf = defaultTransmittancePmf();
     Renderer r(context, s, seed + 7919u, /*pilotLevel=*/0);
     std::vector<glm::dvec3> weight;
     double pixels = 0.0;
@@ -276,35 +280,151 @@ PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t
     return result;
 }
 
+PmfPilotResult runTransmittancePmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t seed) {
+    PmfPilotResult result;
+    result.kind = PilotKind::Transmittance;
+    const TransmittanceEstimatorSettings& t = sceneIn.integrator.transmittance;
+    if (t.type != TransmittanceEstimatorType::DebiasedRayMarch)
+        throw std::logic_error("the transmittance pmf pilot needs debiased ray marching");
+    const PmfSettings settings = t.pmf;
+    const uint32_t k = t.level;
+    // The shader truncates j at kTrMaxCombLog2 - 1: levels m >= levelCap add nothing.
+    result.levelCap = shader::kTrMaxCombLog2 > k + 1 ? shader::kTrMaxCombLog2 - k : 1u;
+    result.maxRaySurvival = 2.0;  // points per estimate double per level
+    result.rayCap = double(1u << shader::kTrMaxCombLog2);
+    const uint32_t levels = std::min(settings.pilotLevels, result.levelCap);
+    const uint32_t spp = std::max<uint32_t>(settings.pilotSpp, 2);  // the base variance needs two samples
+
+    Scene s = sceneIn;
+    if (s.integrator.debias.estimator != DebiasEstimator::None) {
+        s.integrator.debias.estimator = DebiasEstimator::None;  // paths to the base depth k
+        s.integrator.debias.pmf = PmfSettings{};
+    }
+    s.integrator.russianRoulette = false;  // survival would depend on the weighted correction
+    s.integrator.transmittance.pmf = defaultTransmittancePmf();
+    Renderer r(context, s, seed + 7919u, /*pilotLevel=*/0, PilotKind::Transmittance);
+    const size_t pixelCount = size_t(s.camera.width) * s.camera.height;
+    const double pixels = double(pixelCount);
+    std::vector<glm::dvec3> weight(pixelCount), baseSum(pixelCount), baseSq(pixelCount);
+    std::vector<double> d2(pixelCount);
+    for (uint32_t m = 0; m < levels; ++m) {
+        std::fill(d2.begin(), d2.end(), 0.0);
+        double seconds = 0.0;
+        for (uint32_t i = 0; i < spp; ++i) {
+            r.restartAtPilotLevel(m);
+            const std::vector<glm::vec4> once = r.renderSample(i);
+            result.pilotGpuSeconds += gpuSeconds(r.stats());
+            result.pilotWallSeconds += r.stats().wallSeconds;
+            r.restartAtPilotLevel(m | shader::kTrPilotHalfWeight);
+            const std::vector<glm::vec4> twice = r.renderSample(i);
+            result.pilotGpuSeconds += gpuSeconds(r.stats());
+            result.pilotWallSeconds += r.stats().wallSeconds;
+            for (size_t p = 0; p < pixelCount; ++p) {
+                if (once[p].w != 0.0f || twice[p].w != 0.0f) continue;  // a non-finite sample, dropped
+                const glm::dvec3 a(once[p]), b(twice[p]);
+                const glm::dvec3 d = b - a;
+                if (m == 0) {
+                    const glm::dvec3 base = 2.0 * a - b;
+                    baseSum[p] += base;
+                    baseSq[p] += base * base;
+                }
+                d2[p] += (d.x * d.x + d.y * d.y + d.z * d.z) / 3.0;  // weighted below (weights need level 0)
+            }
+        }
+        // The cost of a path at this level: a batched render, as the real one runs (one sample per
+        // dispatch would charge every sample the dispatch overhead).
+        r.restartAtPilotLevel(m);
+        RenderRequest req;
+        req.spp = spp;
+        r.render(req);
+        seconds = gpuSeconds(r.stats());
+        result.pilotGpuSeconds += seconds;
+        result.pilotWallSeconds += r.stats().wallSeconds;
+
+        const double n = double(spp);
+        if (m == 0) {
+            for (size_t p = 0; p < pixelCount; ++p) {
+                const glm::dvec3 mean = baseSum[p] / n;
+                weight[p] = 1.0 / (mean * mean + kWeightEpsilon);
+                const glm::dvec3 v = glm::max(baseSq[p] / n - mean * mean, glm::dvec3(0.0)) * (n / (n - 1.0)) * weight[p];
+                result.baseVariance += (v.x + v.y + v.z) / (3.0 * pixels);
+            }
+        }
+        PilotLevel level;
+        level.level = m;
+        double sumSq = 0.0;
+        for (size_t p = 0; p < pixelCount; ++p) {
+            // The per-channel weights: mean weight x mean D^2 over channels would mix them, so
+            // weight the channel sum by the channels' mean weight (grey media: equal).
+            const double w = (weight[p].x + weight[p].y + weight[p].z) / 3.0;
+            const double value = w * d2[p] / n;
+            level.secondMoment += value / pixels;
+            sumSq += value * value;
+        }
+        const double spread = std::sqrt(std::max(0.0, sumSq / pixels - level.secondMoment * level.secondMoment));
+        level.relativeError = level.secondMoment > 0.0 ? spread / std::sqrt(pixels) / level.secondMoment : 0.0;
+        level.secondsPerPath = seconds / (n * pixels);
+        level.raysPerPath = double(1u << std::min(k + m + 1, shader::kTrMaxCombLog2));
+        result.levels.push_back(level);
+    }
+
+    choosePmf(result, DebiasEstimator::SingleTerm);
+    result.chosen.pmf.pilotSpp = settings.pilotSpp;
+    result.chosen.pmf.pilotLevels = settings.pilotLevels;
+    return result;
+}
+
 std::string PmfPilotResult::summary() const {
     auto describe = [](const PmfCandidate& c) {
         std::string name = c.pmf.type == PmfType::Geometric ? fmt::format("geometric r = {:.2f}", c.pmf.r)
                                                             : fmt::format("power law alpha = {:.2f}", c.pmf.alpha);
         return fmt::format("{}: predicted variance x cost {:.4g}", name, c.product());
     };
-    std::string s = fmt::format("pmf pilot ({} levels, {:.2f} s GPU): chosen {}\n", levels.size(), pilotGpuSeconds,
-                                describe(chosen));
+    const bool marching = kind == PilotKind::Transmittance;
+    std::string s = fmt::format("{} pmf pilot ({} levels, {:.2f} s GPU): chosen {}\n",
+                                marching ? "transmittance (debiased ray marching)" : "path-depth", levels.size(),
+                                pilotGpuSeconds, describe(chosen));
     s += fmt::format("  default {}\n  default {}\n", describe(geometricDefault), describe(powerLawDefault));
-    s += "  level: E[D^2] (weighted) +- relative error, modelled E[D^2], us per path, rays per path, ideal p\n";
+    s += fmt::format("  level: E[D^2] (weighted) +- relative error, modelled E[D^2], us per path, {}, ideal p\n",
+                     marching ? "points per estimate" : "rays per path");
     for (size_t i = 0; i < levels.size(); ++i)
         s += fmt::format("    {}: {:.4g} +- {:.2f}, {:.4g}, {:.3f}, {:.3f}, {:.3f}\n", levels[i].level,
                          levels[i].secondMoment, levels[i].relativeError, model.secondMomentAt(uint32_t(i)),
                          levels[i].secondsPerPath * 1e6, levels[i].raysPerPath, idealPmf[i]);
-    s += fmt::format("  tail: E[D^2] ratio {:.3f} per level (upper bound used: {:.3f}); cost {:.3g} us + {:.3g} us "
-                     "per ray, ray increments shrink by {:.3f} per level; base variance {:.4g}\n",
-                     model.decay, model.decayUpper, model.costIntercept * 1e6, model.costPerRay * 1e6,
-                     model.raySurvival, baseVariance);
+    if (marching)
+        s += fmt::format("  tail: E[D^2] ratio {:.3f} per level (upper bound used: {:.3f}); cost {:.3g} us + {:.3g} us "
+                         "per point, points double per level up to level {}; base variance {:.4g}\n",
+                         model.decay, model.decayUpper, model.costIntercept * 1e6, model.costPerRay * 1e6, levelCap - 1,
+                         baseVariance);
+    else
+        s += fmt::format("  tail: E[D^2] ratio {:.3f} per level (upper bound used: {:.3f}); cost {:.3g} us + {:.3g} us "
+                         "per ray, ray increments shrink by {:.3f} per level; base variance {:.4g}\n",
+                         model.decay, model.decayUpper, model.costIntercept * 1e6, model.costPerRay * 1e6,
+                         model.raySurvival, baseVariance);
     return s;
 }
 
-bool resolveAutoPmf(gpu::Context& context, Scene& scene, uint32_t seed, PmfPilotResult* out) {
+std::vector<PmfPilotResult> resolveAutoPmfs(gpu::Context& context, Scene& scene, uint32_t seed) {
+    std::vector<PmfPilotResult> pilots;
     DebiasSettings& d = scene.integrator.debias;
-    if (d.estimator == DebiasEstimator::None || d.pmf.type != PmfType::Auto) return false;
-    PmfPilotResult r = runPmfPilot(context, scene, seed);
-    d.pmf = r.chosen.pmf;
-    d.pmf.origin = "chosen by the auto pilot: the lowest predicted work x variance over geometric and power-law pmfs";
-    if (out) *out = std::move(r);
-    return true;
+    if (d.estimator != DebiasEstimator::None && d.pmf.type == PmfType::Auto) {
+        pilots.push_back(runPmfPilot(context, scene, seed));
+        d.pmf = pilots.back().chosen.pmf;
+        d.pmf.origin = "chosen by the auto pilot: the lowest predicted work x variance over geometric and power-law pmfs";
+    }
+    TransmittanceEstimatorSettings& t = scene.integrator.transmittance;
+    if (t.type == TransmittanceEstimatorType::DebiasedRayMarch && t.pmf.type == PmfType::Auto) {
+        if (scene.media.empty()) {
+            t.pmf = defaultTransmittancePmf();
+            t.pmf.origin = "auto: the scene has no media, so no transmittance is estimated (the default pmf)";
+        } else {
+            pilots.push_back(runTransmittancePmfPilot(context, scene, seed));
+            t.pmf = pilots.back().chosen.pmf;
+            t.pmf.origin = "chosen by the auto pilot: the lowest predicted work x variance over geometric and "
+                           "power-law pmfs";
+        }
+    }
+    return pilots;
 }
 
 }  // namespace telescope

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "gpu/context.h"
+#include "render/render_plan.h"
 #include "scene/scene.h"
 
 namespace telescope {
@@ -40,6 +41,7 @@ struct PilotLevel {
 
 // The fitted model the prediction extrapolates with (fitPilotModel).
 struct PilotModel {
+    double rayCap = 4096.0;  // rays (or points) per path at most: the tracer's depth cap
     std::vector<double> secondMoment;  // per measured level: max(measured, fitted line)
     double decay = 0.0;       // fitted E[D_{m+1}^2] / E[D_m^2]
     double decayUpper = 0.0;  // its upper bound (two standard errors), used beyond the levels
@@ -60,9 +62,12 @@ struct PmfCandidate {
 };
 
 struct PmfPilotResult {
-    std::vector<PilotLevel> levels;
+    PilotKind kind = PilotKind::PathDepth;  // whose pmf: path depth or debiased ray marching
+    std::vector<PilotLevel> levels;         // for transmittance, raysPerPath = points per estimate
     double baseVariance = 0.0;     // weighted variance of the base I(k) per sample
     uint32_t levelCap = 4096;      // deepest level that can contribute (set by the pilot)
+    double maxRaySurvival = 1.0;   // path depth: ray increments shrink; marching: points double
+    double rayCap = 4096.0;        // the cost coordinate's cap (path depth: the tracer's depth cap)
     PilotModel model;              // fitPilotModel
     std::vector<double> idealPmf;  // sqrt(E[D_j^2]/c_j), normalised over the measured levels
     PmfCandidate chosen, geometricDefault, powerLawDefault;
@@ -77,6 +82,16 @@ struct PmfPilotResult {
 // pilot_levels) and returns the measurements and the chosen pmf.
 PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& scene, uint32_t seed);
 
+// The same recipe for debiased ray marching's level pmf (integrator.transmittance_estimator):
+// per level m = j - k, pilot_spp samples per pixel are rendered twice with every transmittance
+// estimate at the fixed level j, the correction weighted once by 1 and once by 2, with the same
+// random numbers and no Russian roulette. Per sample, the difference of the two is the path's
+// unweighted correction D_j (to first order in the corrections when a path holds several
+// estimates) and twice the first minus the second its base. Paths are traced to the base depth
+// k only (a path-depth telescope is off in the pilot). The cost coordinate is the number of
+// points per estimate, 2^(j+1); levels beyond kTrMaxCombLog2 are truncated as in the shader.
+PmfPilotResult runTransmittancePmfPilot(gpu::Context& context, const Scene& scene, uint32_t seed);
+
 // Fits pilot.model from pilot.levels (exposed for tests).
 void fitPilotModel(PmfPilotResult& pilot);
 
@@ -87,8 +102,10 @@ PmfCandidate predictPmf(const PmfPilotResult& pilot, const PmfSettings& pmf, Deb
 // geometric r or power-law alpha (0.02 to 0.98) with the smallest predicted variance x cost.
 void choosePmf(PmfPilotResult& pilot, DebiasEstimator estimator);
 
-// When the scene asks for pmf "auto", runs the pilot and replaces the pmf by the chosen one;
-// returns true (and the pilot in *result) when it did.
-bool resolveAutoPmf(gpu::Context& context, Scene& scene, uint32_t seed, PmfPilotResult* result = nullptr);
+// Resolves every pmf "auto" of the scene (the path-depth pmf, debiased ray marching's pmf): runs
+// each one's pilot and puts the chosen pmf in the scene. Returns the pilots that ran, in that
+// order (none when the scene has no "auto"). A transmittance "auto" in a scene without media
+// has nothing to measure and becomes the default pmf (it cannot change the image).
+std::vector<PmfPilotResult> resolveAutoPmfs(gpu::Context& context, Scene& scene, uint32_t seed);
 
 }  // namespace telescope

@@ -30,11 +30,15 @@ uint32_t filterConstant(const Camera& camera) {
     throw std::logic_error("unknown reconstruction filter '" + camera.filter + "' (the scene loader rejects it)");
 }
 
-RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f, uint32_t pilotLevel) {
+RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f, uint32_t pilotLevel, PilotKind pilotKind) {
     RenderPlan plan;
     if (pilotLevel != kNoPilotLevel && usesPhotons(scene.integrator))
         throw std::logic_error("the pmf pilot runs the path tracer only");
+    if (pilotLevel != kNoPilotLevel && pilotKind == PilotKind::Transmittance &&
+        scene.integrator.transmittance.type != TransmittanceEstimatorType::DebiasedRayMarch)
+        throw std::logic_error("the transmittance pmf pilot runs debiased ray marching only");
     plan.pilotLevel = pilotLevel;
+    plan.pilotKind = pilotKind;
     if (usesPhotons(scene.integrator)) planPhotons(scene, f, plan);
     else planPathTrace(scene, f, plan);
     return plan;
@@ -56,7 +60,9 @@ std::string describePlan(const Scene& scene, const RenderPlan& plan) {
                          scene.integrator.debias.pmf.origin);
     if (!scene.media.empty() && scene.integrator.transmittance.type == TransmittanceEstimatorType::DebiasedRayMarch)
         s += fmt::format("transmittance pmf: {}; {}\n", pmfDescription(scene.integrator.transmittance.pmf),
-                         scene.integrator.transmittance.pmf.origin);
+                         scene.integrator.transmittance.pmf.type == PmfType::Auto
+                             ? "chosen by a pilot before the render (see below)"
+                             : scene.integrator.transmittance.pmf.origin);
     s += "passes, per batch of samples:\n";
     for (const auto& p : plan.passes) s += fmt::format("  {:<16} {}\n", p.name, p.why);
     s += "not scheduled:\n";

@@ -33,8 +33,11 @@ struct FeatureSwitch {
 
 // The pmf pilot's renders (render/pmf_pilot.h) take every sample at one fixed level and record the
 // unweighted correction D_j instead of the estimate: a way of running the path tracer, not a
-// setting of the scene.
+// setting of the scene. The path-depth pilot records D_j in its own sums; the transmittance pilot
+// fixes debiased marching's level (its pilotLevel may carry shader::kTrPilotHalfWeight) and the
+// host differences two renders.
 constexpr uint32_t kNoPilotLevel = 0xffffffffu;
+enum class PilotKind { PathDepth, Transmittance };
 
 struct RenderPlan {
     std::vector<PlannedPass> passes;     // in dispatch order, per batch of samples
@@ -47,9 +50,11 @@ struct RenderPlan {
     std::string estimator;               // one line describing the estimator
     LevelSchedule levelSchedule = LevelSchedule::PerPixel;  // as run (per_pixel unless debiased)
     uint32_t pilotLevel = kNoPilotLevel;  // the pmf pilot's first level (path tracer only)
+    PilotKind pilotKind = PilotKind::PathDepth;
 };
 
-RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& features, uint32_t pilotLevel = kNoPilotLevel);
+RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& features, uint32_t pilotLevel = kNoPilotLevel,
+                          PilotKind pilotKind = PilotKind::PathDepth);
 
 // Human-readable plan, as `telescope plan` prints it.
 std::string describePlan(const Scene& scene, const RenderPlan& plan);

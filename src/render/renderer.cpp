@@ -17,13 +17,13 @@ double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(
 constexpr uint32_t kMaxDispatchesPerBatch = 64;
 }  // namespace
 
-Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uint32_t pilotLevel)
+Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uint32_t pilotLevel, PilotKind pilotKind)
     : context_(context), camera_(scene.camera), integrator_(scene.integrator), seed_(seed) {
     auto start = Clock::now();
-    if (scene.integrator.debias.estimator != DebiasEstimator::None && scene.integrator.debias.pmf.type == PmfType::Auto)
+    if (*autoPmfKey(scene.integrator) != '\0')
         throw std::logic_error("the auto pmf must be resolved by a pilot (resolveAutoPmf) before rendering");
     gpuScene_ = buildGpuScene(scene);
-    plan_ = makeRenderPlan(scene, gpuScene_.features, pilotLevel);
+    plan_ = makeRenderPlan(scene, gpuScene_.features, pilotLevel, pilotKind);
     stats_.sceneSeconds = secondsSince(start);
     auto phase = Clock::now();
 

@@ -85,7 +85,8 @@ struct RenderStats {
 class Renderer {
 public:
     // pilotLevel: the pmf pilot's first fixed level (render_plan.h); kNoPilotLevel for a render.
-    Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uint32_t pilotLevel = kNoPilotLevel);
+    Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uint32_t pilotLevel = kNoPilotLevel,
+             PilotKind pilotKind = PilotKind::PathDepth);
     ~Renderer();
 
     const RenderPlan& plan() const { return plan_; }

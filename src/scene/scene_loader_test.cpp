@@ -511,6 +511,14 @@ TEST(SceneLoader, DebiasSettings) {
 
     // The transmittance default differs (docs/ESTIMATORS.md section 1).
     EXPECT_FLOAT_EQ(s.integrator.transmittance.pmf.r, 0.65f);
+    // Debiased marching takes "auto" too (the transmittance pilot), with its own pilot size.
+    s = load(R"({"integrator": {"transmittance_estimator": {"type": "debiased_ray_march", "pmf": {"type": "auto"}}}})");
+    EXPECT_EQ(s.integrator.transmittance.pmf.type, PmfType::Auto);
+    EXPECT_EQ(s.integrator.transmittance.pmf.pilotSpp, 2u);
+    EXPECT_EQ(s.integrator.transmittance.pmf.pilotLevels, 5u);
+    EXPECT_STREQ(autoPmfKey(s.integrator), "integrator.transmittance_estimator.pmf.type");
+    s = load(R"({"integrator": {"debias": {"estimator": "single_term", "pmf": {"type": "auto"}}}})");
+    EXPECT_STREQ(autoPmfKey(s.integrator), "integrator.debias.pmf.type");
     s = load(R"({"integrator": {"debias": {"estimator": "single_term", "pmf": {"type": "geometric"}, "test_pmf_weight": 1.07}}})");
     EXPECT_FLOAT_EQ(s.integrator.debias.pmf.r, 0.25f);
     EXPECT_EQ(s.integrator.debias.pmf.origin, "given in the scene");
@@ -837,6 +845,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"VdbGridMissingFile", R"({"media": [{"type": "voxel", "grid": {"type": "vdb", "file": "cloud.vdb"}}]})", "", "media[0].grid.file", "cannot open VDB file"},
         BadInput{"VoxelWithoutGrid", R"({"media": [{"type": "voxel"}]})", "", "media[0]", "missing 'grid'"},
         BadInput{"UnknownTransmittance", R"({"media": [{"type": "homogeneous", "transmittance": {"type": "gamma"}}]})", "", "media[0].transmittance.type", "unknown transmittance type 'gamma'"},
+        BadInput{"PmfOnATracker", R"({"integrator": {"transmittance_estimator": {"type": "ratio_tracking", "pmf": {"type": "geometric", "r": 0.5}}}})", "", "integrator.transmittance_estimator.pmf", "only the 'debiased_ray_march' estimator"},
         BadInput{"UnknownTransmittanceEstimator", R"({"integrator": {"transmittance_estimator": {"type": "woodcock"}}})", "", "integrator.transmittance_estimator.type", "unknown transmittance estimator 'woodcock'"},
         BadInput{"TaylorOnLinearMedium", R"({"media": [{"type": "homogeneous", "name": "slab", "transmittance": {"type": "linear"}}], "integrator": {"transmittance_estimator": {"type": "taylor"}}})", "", "integrator.transmittance_estimator.type", "taylor needs a transmittance that is a power series"},
         BadInput{"TaylorOnInterpolatedWithPulse", R"({"media": [{"type": "homogeneous", "transmittance": {"type": "interpolated", "tr_a": {"type": "davis"}, "tr_b": {"type": "pulse"}}}], "integrator": {"transmittance_estimator": {"type": "taylor"}}})", "", "integrator.transmittance_estimator.type", "taylor needs"},

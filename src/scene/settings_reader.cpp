@@ -28,6 +28,10 @@ PmfSettings defaultTransmittancePmf() {
     p.r = 0.65f;
     p.origin = "default for ray marching: for a smooth density E[D_j^2] ~ 4^-j at cost 2^j, so the optimum is "
                "p(j) ~ 2^(-1.5 j), r = 1 - 2^-1.5 ~ 0.65 (finite variance and cost need 0.5 < r < 0.75)";
+    // "auto": 2 spp (each rendered three times) at 5 levels, about 30 samples per pixel of
+    // pilot, 2^(k+6) points per estimate at the deepest measured level.
+    p.pilotSpp = 2;
+    p.pilotLevels = 5;
     return p;
 }
 
@@ -302,7 +306,7 @@ void SceneReader::readDebias(const json& v, const std::string& key, bool photons
     if (const json* pmf = find(v, "pmf")) d.pmf = readPmf(*pmf, member(key, "pmf"), d.pmf, true);
 }
 
-// A level pmf: geometric or power law, or (debiased path depth only) "auto", chosen by a pilot.
+// A level pmf: geometric or power law, or (path depth and debiased ray marching) "auto", chosen by a pilot.
 // Keys not given keep their value in pmf (the default of the telescope it belongs to).
 PmfSettings SceneReader::readPmf(const json& v, const std::string& key, PmfSettings pmf, bool allowAuto) const {
     expectObject(v, key);
@@ -399,7 +403,11 @@ void SceneReader::readTransmittanceEstimator(const json& v, const std::string& k
         if (t.type != TransmittanceEstimatorType::Taylor) fail(member(key, "points"), "only the 'taylor' estimator has points");
         t.points = integer(*n, member(key, "points"), 0, int(shader::kTrTaylorMaxPoints));
     }
-    if (const json* pmf = find(v, "pmf")) t.pmf = readPmf(*pmf, member(key, "pmf"), t.pmf, false);
+    if (const json* pmf = find(v, "pmf")) {
+        if (t.type != TransmittanceEstimatorType::DebiasedRayMarch)
+            fail(member(key, "pmf"), "only the 'debiased_ray_march' estimator draws levels from a pmf");
+        t.pmf = readPmf(*pmf, member(key, "pmf"), t.pmf, true);
+    }
 }
 
 }  // namespace scene_reader

@@ -174,13 +174,16 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
             const uint32_t seed = o.seed + si;
             Scene scene = scenes[mi];
             // A pilot's time is part of the method's cost: its curve starts after it.
-            PmfPilotResult pilot;
-            if (resolveAutoPmf(context, scene, seed, &pilot)) {
-                log(pilot.summary());
-                const PmfSettings& c = pilot.chosen.pmf;
-                summary.pilotChoices += fmt::format("{}{}", summary.pilotChoices.empty() ? "" : ", ",
+            PmfPilotResult pilot;  // the pilots' times, summed
+            for (const PmfPilotResult& one : resolveAutoPmfs(context, scene, seed)) {
+                log(one.summary());
+                const PmfSettings& c = one.chosen.pmf;
+                summary.pilotChoices += fmt::format("{}{}{}", summary.pilotChoices.empty() ? "" : ", ",
+                                                    one.kind == PilotKind::Transmittance ? "transmittance " : "",
                                                     c.type == PmfType::Geometric ? fmt::format("r = {:.2f}", c.r)
                                                                                  : fmt::format("alpha = {:.2f}", c.alpha));
+                pilot.pilotGpuSeconds += one.pilotGpuSeconds;
+                pilot.pilotWallSeconds += one.pilotWallSeconds;
             }
             summary.settings.push_back(resolvedSettings(scene));
             // A radiance render, or a derivative render (its own Renderer inside).

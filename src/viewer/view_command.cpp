@@ -567,8 +567,8 @@ int runView(const cli::CommonOptions& common, const ViewOptions& optionsIn) {
     VkSurfaceKHR surface = VK_NULL_HANDLE;
     std::unique_ptr<gpu::Context> context = presentingContext(window, contextOptions, surface);
     Presenter presenter(*context, surface, window.framebufferSize());  // owns the surface from here
-    PmfPilotResult pilot;
-    if (resolveAutoPmf(*context, scene, o.seed, &pilot) && !common.quiet) fmt::print(stderr, "{}", pilot.summary());
+    for (const PmfPilotResult& pilot : resolveAutoPmfs(*context, scene, o.seed))
+        if (!common.quiet) fmt::print(stderr, "{}", pilot.summary());
     {
         Viewer viewer(*context, window, presenter, std::move(scene), o, common.quiet);
         viewer.run();
