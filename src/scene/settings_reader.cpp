@@ -26,8 +26,9 @@ PmfSettings defaultTransmittancePmf() {
     PmfSettings p;
     p.type = PmfType::Geometric;
     p.r = 0.65f;
-    p.origin = "default for ray marching: for a smooth density E[D_j^2] ~ 4^-j at cost 2^j, so the optimum is "
-               "p(j) ~ 2^(-1.5 j), r = 1 - 2^-1.5 ~ 0.65 (finite variance and cost need 0.5 < r < 0.75)";
+    p.origin = "default for ray marching: finite variance and cost need 0.5 < r < 15/16 (E[D_j^2] falls about 16x "
+               "per level for a smooth density, points double); pmf \"auto\" measured r = 0.74 to 0.88 on the shipped "
+               "media scenes, predicting at most 7% less work x variance";
     // "auto": 2 spp (each rendered three times) at 5 levels, about 30 samples per pixel of
     // pilot, 2^(k+6) points per estimate at the deepest measured level.
     p.pilotSpp = 2;
