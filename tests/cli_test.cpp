@@ -205,6 +205,19 @@ TEST_F(Cli, PlanSaysWhichPmfAndWhy) {
     EXPECT_NE(text.find("transmittance pmf: geometric pmf, r = 0.65; "), std::string::npos) << text;
     text = plan(scene(), " --set 'integrator.debias={\"estimator\":\"sum\",\"test_pmf_weight\":1.07}'");
     EXPECT_NE(text.find("TEST ONLY"), std::string::npos) << text;
+    // pmf "auto" for debiased marching: plan runs the pilot and prints what it chose and why.
+    text = plan(test::sourcePath("scenes/absorbing-slab.json"),
+                " --set 'integrator.transmittance_estimator.pmf={\"type\":\"auto\",\"pilot_levels\":3}'");
+    EXPECT_NE(text.find("transmittance pmf: auto pmf (pilot); chosen by a pilot before the render"), std::string::npos) << text;
+    EXPECT_NE(text.find("transmittance_pilot"), std::string::npos) << text;
+    EXPECT_NE(text.find("transmittance (debiased ray marching) pmf pilot (3 levels"), std::string::npos) << text;
+    EXPECT_NE(text.find("default geometric r = 0.65: predicted variance x cost"), std::string::npos) << text;
+    const size_t last = text.rfind("transmittance pmf: ");  // the pmf the pilot chose, last
+    ASSERT_NE(last, std::string::npos) << text;
+    const std::string chosen = text.substr(last, text.find('\n', last) - last);
+    EXPECT_TRUE(chosen.find("geometric pmf, r = ") != std::string::npos ||
+                chosen.find("power-law pmf, alpha = ") != std::string::npos) << chosen;
+    EXPECT_NE(chosen.find("chosen by the auto pilot"), std::string::npos) << chosen;
 }
 
 TEST_F(Cli, WideFilterWithPhotonMappingIsBadInput) {
