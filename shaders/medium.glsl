@@ -349,27 +349,8 @@ vec3 shadowTransmittance(vec3 o, vec3 d, float tMax, uint medium, bool startOnSu
     return vec3(0.0);
 }
 
-// ---- Phase functions (Henyey-Greenstein; g = 0 is isotropic) ----
-// cosTheta between the propagation direction before and after scattering.
-float phaseHG(float cosTheta, float g) {
-    float denom = 1.0 + g * g - 2.0 * g * cosTheta;
-    return (1.0 - g * g) / (4.0 * kPi * denom * sqrt(denom));
-}
-
-vec3 samplePhaseHG(vec3 dir, float g, float u1, float u2) {
-    float cosTheta;
-    if (abs(g) < 1e-3) {
-        cosTheta = 1.0 - 2.0 * u1;
-    } else {
-        float s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u1);
-        cosTheta = clamp((1.0 + g * g - s * s) / (2.0 * g), -1.0, 1.0);
-    }
-    float sinTheta = sqrt(max(0.0, 1.0 - cosTheta * cosTheta));
-    float phi = 2.0 * kPi * u2;
-    vec3 t, b;
-    buildFrame(dir, t, b);
-    return normalize(t * (sinTheta * cos(phi)) + b * (sinTheta * sin(phi)) + dir * cosTheta);
-}
+// ---- Phase functions: shared/phase.h (Henyey-Greenstein; g = 0 is isotropic) ----
+#include "shared/phase.h"
 
 float mediumPhaseG(uint mi) { return sceneMedium(mi).phase == kPhaseHenyeyGreenstein ? sceneMedium(mi).phaseG : 0.0; }
 
