@@ -114,6 +114,33 @@ void scanBlock() {
     atomicMax(PhotonMapRef(uvec2(pc.headerLo, pc.headerHi)).h.maxBucket, fullest);
 }
 
+// Test-only stage (tests/photon_grid_test.cpp): gathers at given points through the built grid.
+void queryStage(PhotonMapRef map, uint id) {
+    // Query i: src.v[2i] = (x, -), src.v[2i+1] = (n, -); out: (base.x, difference.x, found, 0),
+    // added up over the slices (one query per thread: the host dispatches enough threads).
+    Vec4ArrayRef src = Vec4ArrayRef(uvec2(pc.srcLo, pc.srcHi));
+    Vec4ArrayRef dst = Vec4ArrayRef(uvec2(pc.dstLo, pc.dstHi));
+    if (id < pc.count && kGatherCount > 0u) {
+        // k nearest: per query (base.x, 0, found, 0) then the nearest photons so far
+        // (nearestStore), rewritten by every slice; the last slice's sums are the answer.
+        uint stride = 1u + (kGatherCount + 1u) / 2u;
+        NearestStateRef state = NearestStateRef(uvec2(pc.dstLo, pc.dstHi));
+        NearestPhotons nearest;
+        if (pc.sliceBegin == 0u) nearestClear(nearest, kGatherCount);
+        else nearestLoad(state, id * stride + 1u, nearest, kGatherCount);
+        nearestSearch(map, src.v[2u * id].xyz, pc.radius * pc.radius, kGatherCount, pc.sliceBegin, nearest);
+        nearestStore(state, id * stride + 1u, nearest, kGatherCount);
+        GatherSums s = nearestSums(map, nearest, src.v[2u * id + 1u].xyz, pc.radius * pc.radius, kGatherCount,
+                                   kKernel, 0xffffffffu);
+        dst.v[id * stride] = vec4(s.base.x, 0.0, float(s.found), 0.0);
+    } else if (id < pc.count) {
+        GatherSums s = gatherPhotons(map, src.v[2u * id].xyz, src.v[2u * id + 1u].xyz, pc.radius * pc.radius, true,
+                                     pc.logRadius2, pc.logStep2, kKernel, pc.sliceBegin, 0xffffffffu);
+        vec4 sums = vec4(s.base.x, s.difference.x, float(s.found), 0.0);
+        dst.v[id] = pc.sliceBegin == 0u ? sums : dst.v[id] + sums;
+    }
+}
+
 void main() {
     PhotonMapRef map = PhotonMapRef(uvec2(pc.headerLo, pc.headerHi));
     uint stored = min(map.h.storedCount, map.h.capacity);
@@ -154,28 +181,6 @@ void main() {
             }
         }
     } else if (kStage == kGridStageQuery) {
-        // Query i: src.v[2i] = (x, -), src.v[2i+1] = (n, -); out: (base.x, difference.x, found, 0),
-        // added up over the slices (one query per thread: the host dispatches enough threads).
-        Vec4ArrayRef src = Vec4ArrayRef(uvec2(pc.srcLo, pc.srcHi));
-        Vec4ArrayRef dst = Vec4ArrayRef(uvec2(pc.dstLo, pc.dstHi));
-        if (id < pc.count && kGatherCount > 0u) {
-            // k nearest: per query (base.x, 0, found, 0) then the nearest photons so far
-            // (nearestStore), rewritten by every slice; the last slice's sums are the answer.
-            uint stride = 1u + (kGatherCount + 1u) / 2u;
-            NearestStateRef state = NearestStateRef(uvec2(pc.dstLo, pc.dstHi));
-            NearestPhotons nearest;
-            if (pc.sliceBegin == 0u) nearestClear(nearest, kGatherCount);
-            else nearestLoad(state, id * stride + 1u, nearest, kGatherCount);
-            nearestSearch(map, src.v[2u * id].xyz, pc.radius * pc.radius, kGatherCount, pc.sliceBegin, nearest);
-            nearestStore(state, id * stride + 1u, nearest, kGatherCount);
-            GatherSums s = nearestSums(map, nearest, src.v[2u * id + 1u].xyz, pc.radius * pc.radius, kGatherCount,
-                                       kKernel, 0xffffffffu);
-            dst.v[id * stride] = vec4(s.base.x, 0.0, float(s.found), 0.0);
-        } else if (id < pc.count) {
-            GatherSums s = gatherPhotons(map, src.v[2u * id].xyz, src.v[2u * id + 1u].xyz, pc.radius * pc.radius, true,
-                                         pc.logRadius2, pc.logStep2, kKernel, pc.sliceBegin, 0xffffffffu);
-            vec4 sums = vec4(s.base.x, s.difference.x, float(s.found), 0.0);
-            dst.v[id] = pc.sliceBegin == 0u ? sums : dst.v[id] + sums;
-        }
+        queryStage(map, id);
     }
 }
