@@ -213,6 +213,100 @@ bool takeRecord(uint lane, inout PathState p, inout Rng rng, inout uint g, inout
 
 #include "loop_cap.glsl"
 
+// Where a lane starts in this dispatch (the loop budget's records: a path carried from an
+// earlier dispatch, or a new sample g). False when the lane has nothing to do here: heavy records
+// run alone, and lanes beside a heavy one wait for it.
+bool startLane(uvec2 pixel, uint pixelIndex, LevelPmf pmf, uint end, inout uint g, out Rng rng, out PathState path,
+               out float rays, out bool alone, out bool safe) {
+    rays = 0.0;
+    alone = false;
+    safe = false;
+    bool resumed = false;
+    if (kLoopBudget != 0u) {
+        uint state = recordOf(pixelIndex).v[7].w;
+        bool heavy = (state & kRecordHeavy) != 0u;
+        if (heavy) {
+            // Heavy records run only in dispatches that finish carried paths (no new samples: the
+            // record's samples come first, and such dispatches continue to the batch's end), the
+            // lowest lane of the group holding one alone; the others keep their records.
+            uvec4 heavyLanes = subgroupBallot(true);
+            if (pc.sampleCount != 0u || gl_SubgroupInvocationID != subgroupBallotFindLSB(heavyLanes)) return false;
+        }
+        uvec4 heavyGroup = subgroupBallot(heavy);
+        if (!heavy && pc.sampleCount == 0u && heavyGroup != uvec4(0u)) return false;  // wait for the heavy one
+        if (heavy) {
+            alone = true;
+            gLoopBudget = 1u;  // its heavy step, then it carries the path on
+        } else if ((state & kRecordSafe) != 0u) {
+            safe = true;
+            gLoopBudget = kSafeLoopBudget;
+            gLoopHardLimit = kSafeHardLimit;
+        }
+        if (state != 0u) resumed = takeRecord(pixelIndex, path, rng, g, rays);
+    }
+    if (!resumed) {
+        if (g >= end) return false;
+        path = startSample(pixel, pixelIndex, g, pmf, rng);
+    }
+    return true;
+}
+
+// The pmf pilot's per-lane sums (kPilot*): D_j and I(k) of the same paths, and the rays traced.
+struct PilotLane { vec3 d, d2, base, base2; float rays, dropped; };
+
+// A finished path's estimate into the lane's sums (or the pilot's).
+void addFinishedPath(PathState path, bool overlong, float rays, inout SampleSums sums, inout PilotLane pilot) {
+    if (isWideFilter(kFilter)) path.result = PathResult(path.result.base * gFilterWeight, path.result.correction * gFilterWeight);
+    if (overlong) path.result = PathResult(vec3(uintBitsToFloat(0x7f800000u)), vec3(0.0));  // counted as dropped
+    if (!kPilot) {
+        sampleSumsAdd(sums, path.result.base, path.result.correction);
+    } else if (!isFiniteVec(path.result.correction) || !isFiniteVec(path.result.base)) {
+        pilot.dropped += 1.0;
+    } else {
+        vec3 d = path.result.correction, b = path.result.base;
+        pilot.d += d;
+        pilot.d2 += d * d;
+        pilot.base += b;
+        pilot.base2 += b * b;
+        pilot.rays += rays;
+    }
+}
+
+void writePilotSums(uint pixelIndex, uint pixelCount, PilotLane p) {
+    AccumRef pilot = AccumRef(uvec2(pc.pilotAddressLo, pc.pilotAddressHi));
+    accumulateAdd(pilot, kPilotCorrection, pixelIndex, pixelCount, vec4(p.d, p.dropped));
+    accumulateAdd(pilot, kPilotCorrectionSq, pixelIndex, pixelCount, vec4(p.d2, 0.0));
+    accumulateAdd(pilot, kPilotBase, pixelIndex, pixelCount, vec4(p.base, 0.0));
+    accumulateAdd(pilot, kPilotBaseSq, pixelIndex, pixelCount, vec4(p.base2, 0.0));
+    accumulateAdd(pilot, kPilotRays, pixelIndex, pixelCount, vec4(p.rays, 0.0, 0.0, 0.0));
+}
+
+// Where a lane's work in this dispatch started: a retry begins there again.
+struct LaneStart { PathState path; Rng rng; uint g; float rays, filterWeight; };
+
+// After the lane's loop: a retry when lavapipe's cap was reached or a walk stopped (this
+// dispatch's work of the lane undone), a carried path saved, and the sums accumulated.
+void endLane(uint pixelIndex, uint pixelCount, LaneStart start, PathState path, Rng rng, uint g, float rays, bool alone,
+             bool safe, bool carried, bool aborted, bool abortedFresh, SampleSums sums, PilotLane pilot) {
+    bool capped = loopCapReached(2u + (pc.width >> 31u));
+    if (kLoopBudget != 0u && (capped || aborted) && !alone && !(safe && capped)) {
+        // Retried from where it started: alone when one step did not fit (from the start of a
+        // dispatch, or at the safe budget), else with the safe budget.
+        gFilterWeight = start.filterWeight;
+        bool heavy = aborted && (abortedFresh || safe);
+        saveRecord(pixelIndex, start.path, start.rng, start.g, start.rays, heavy ? kRecordHeavy : kRecordSafe);
+        atomicAdd(loopStats().u[kLoopStatRetried], 1u);
+        return;
+    }
+    if (carried) saveRecord(pixelIndex, path, rng, g, rays, safe ? kRecordSafe : 0u);
+    if (capped) atomicAdd(loopStats().u[kLoopStatCapHits], 1u);  // not recoverable: an error
+    if (kPilot) {
+        writePilotSums(pixelIndex, pixelCount, pilot);
+        return;
+    }
+    accumulateSums(AccumRef(uvec2(pc.accumAddressLo, pc.accumAddressHi)), pixelIndex, pixelCount, sums);
+}
+
 void main() {
     if (kLevelSchedule == kLevelScheduleQueued) {
         if (pc.sampleCount != 0u) queuedMain(LevelPmf(kPmfType, kPmfR, kPmfAlpha));
@@ -230,45 +324,14 @@ void main() {
     uint g = pc.sampleBase;
     Rng rng;
     PathState path;
-    float rays = 0.0;
-    bool resumed = false, alone = false, safe = false;
-    if (kLoopBudget != 0u) {
-        uint state = recordOf(pixelIndex).v[7].w;
-        bool heavy = (state & kRecordHeavy) != 0u;
-        if (heavy) {
-            // Heavy records run only in dispatches that finish carried paths (no new samples: the
-            // record's samples come first, and such dispatches continue to the batch's end), the
-            // lowest lane of the group holding one alone; the others keep their records.
-            uvec4 heavyLanes = subgroupBallot(true);
-            if (pc.sampleCount != 0u || gl_SubgroupInvocationID != subgroupBallotFindLSB(heavyLanes)) return;
-        }
-        uvec4 heavyGroup = subgroupBallot(heavy);
-        if (!heavy && pc.sampleCount == 0u && heavyGroup != uvec4(0u)) return;  // wait for the heavy one
-        if (heavy) {
-            alone = true;
-            gLoopBudget = 1u;  // its heavy step, then it carries the path on
-        } else if ((state & kRecordSafe) != 0u) {
-            safe = true;
-            gLoopBudget = kSafeLoopBudget;
-            gLoopHardLimit = kSafeHardLimit;
-        }
-        if (state != 0u) resumed = takeRecord(pixelIndex, path, rng, g, rays);
-    }
-    if (!resumed) {
-        if (g >= end) return;
-        path = startSample(pixel, pixelIndex, g, pmf, rng);
-    }
+    float rays;
+    bool alone, safe;
+    if (!startLane(pixel, pixelIndex, pmf, end, g, rng, path, rays, alone, safe)) return;
     // Where this dispatch's work for the lane starts: a retry begins here again.
-    PathState startPath = path;
-    Rng startRng = rng;
-    uint startG = g;
-    float startRays = rays, startFilterWeight = gFilterWeight;
+    LaneStart start = LaneStart(path, rng, g, rays, gFilterWeight);
 
     SampleSums sums = sampleSumsZero();
-    // pmf pilot: its own sums (kPilot*), D_j and I(k) of the same paths, and the rays traced.
-    vec3 pilotD = vec3(0.0), pilotD2 = vec3(0.0), pilotBase = vec3(0.0), pilotBase2 = vec3(0.0);
-    float pilotRays = 0.0, pilotDropped = 0.0;
-
+    PilotLane pilot = PilotLane(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0);
     bool working = true, carried = false, aborted = false, abortedFresh = false;
     while (working) {
         // ---- Past the budget: carry the path, before its next step, to the next dispatch ----
@@ -296,46 +359,11 @@ void main() {
         }
         if (!more) {
             // ---- Path finished: accumulate, then start the next sample in the same lane ----
-            if (isWideFilter(kFilter)) path.result = PathResult(path.result.base * gFilterWeight, path.result.correction * gFilterWeight);
-            if (overlong) path.result = PathResult(vec3(uintBitsToFloat(0x7f800000u)), vec3(0.0));  // counted as dropped
-            if (!kPilot) {
-                sampleSumsAdd(sums, path.result.base, path.result.correction);
-            } else if (!isFiniteVec(path.result.correction) || !isFiniteVec(path.result.base)) {
-                pilotDropped += 1.0;
-            } else {
-                vec3 d = path.result.correction, b = path.result.base;
-                pilotD += d;
-                pilotD2 += d * d;
-                pilotBase += b;
-                pilotBase2 += b * b;
-                pilotRays += rays;
-            }
+            addFinishedPath(path, overlong, rays, sums, pilot);
             rays = 0.0;
             if (++g >= end) working = false;
             else path = startSample(pixel, pixelIndex, g, pmf, rng);
         }
     }
-    // ---- Lavapipe's cap reached, or a walk stopped: undo this dispatch's work of the lane ----
-    bool capped = loopCapReached(2u + (pc.width >> 31u));
-    if (kLoopBudget != 0u && (capped || aborted) && !alone && !(safe && capped)) {
-        // Retried from where it started: alone when one step did not fit (from the start of a
-        // dispatch, or at the safe budget), else with the safe budget.
-        gFilterWeight = startFilterWeight;
-        bool heavy = aborted && (abortedFresh || safe);
-        saveRecord(pixelIndex, startPath, startRng, startG, startRays, heavy ? kRecordHeavy : kRecordSafe);
-        atomicAdd(loopStats().u[kLoopStatRetried], 1u);
-        return;
-    }
-    if (carried) saveRecord(pixelIndex, path, rng, g, rays, safe ? kRecordSafe : 0u);
-    if (capped) atomicAdd(loopStats().u[kLoopStatCapHits], 1u);  // not recoverable: an error
-    if (kPilot) {
-        AccumRef pilot = AccumRef(uvec2(pc.pilotAddressLo, pc.pilotAddressHi));
-        accumulateAdd(pilot, kPilotCorrection, pixelIndex, pixelCount, vec4(pilotD, pilotDropped));
-        accumulateAdd(pilot, kPilotCorrectionSq, pixelIndex, pixelCount, vec4(pilotD2, 0.0));
-        accumulateAdd(pilot, kPilotBase, pixelIndex, pixelCount, vec4(pilotBase, 0.0));
-        accumulateAdd(pilot, kPilotBaseSq, pixelIndex, pixelCount, vec4(pilotBase2, 0.0));
-        accumulateAdd(pilot, kPilotRays, pixelIndex, pixelCount, vec4(pilotRays, 0.0, 0.0, 0.0));
-        return;
-    }
-    accumulateSums(AccumRef(uvec2(pc.accumAddressLo, pc.accumAddressHi)), pixelIndex, pixelCount, sums);
+    endLane(pixelIndex, pixelCount, start, path, rng, g, rays, alone, safe, carried, aborted, abortedFresh, sums, pilot);
 }
