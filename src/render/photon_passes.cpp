@@ -28,6 +28,7 @@
 #include "shared/gpu_types.h"
 #include "shared/photon_density.h"
 #include "shared/rng.h"
+#include "scene/enum_names.h"
 
 namespace telescope {
 
@@ -37,9 +38,7 @@ bool unbiased(const IntegratorSettings& in) { return in.debias.estimator != Debi
 bool progressive(const IntegratorSettings& in) { return in.type == IntegratorType::ProgressivePhotonMap; }
 bool perPixel(const IntegratorSettings& in) { return unbiased(in) && in.debias.schedule == LevelSchedule::PerPixel; }
 
-const char* kernelName(PhotonKernel k) {
-    return k == PhotonKernel::Cone ? "cone" : k == PhotonKernel::Uniform ? "uniform" : "Epanechnikov";
-}
+const char* kernelName(PhotonKernel k) { return nameOf(kPhotonKernelNames, k); }
 
 shader::PhotonLevels photonLevels(const DebiasSettings& d) {
     return {d.pmf.r, std::log(d.photon.areaRatio), d.photon.photonGrowth, d.photon.levelCap};
@@ -91,8 +90,7 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
                                                           : std::string(),
                                        kernelName(ph.kernel), nee ? ", direct light by next-event estimation" : "")});
     plan.skipped.push_back({"volume tracking", "photon mapping scenes have no participating media (the loader rejects them)"});
-    plan.skipped.push_back({"path_trace", fmt::format("the integrator is '{}'",
-                                                      progressive(in) ? "progressive_photon_map" : "photon_map")});
+    plan.skipped.push_back({"path_trace", fmt::format("the integrator is '{}'", nameOf(kIntegratorTypeNames, in.type))});
 
     // ---- Estimator ----
     if (!unbiased(in) && !progressive(in)) {

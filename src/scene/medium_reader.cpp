@@ -3,6 +3,8 @@
 // read here (and added to MediumType, scene.h).
 #include "scene/scene_reader.h"
 
+#include "scene/enum_names.h"
+
 #include <array>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -387,8 +389,7 @@ DensityGrid SceneReader::readVdbGrid(const json& v, const std::string& key) {
 void SceneReader::checkEstimatorFitsMedia(const json& doc) const {
     if (usesPhotons(scene_.integrator) && !scene_.media.empty())
         fail("media", fmt::format("the '{}' integrator does not support participating media (use path_tracer)",
-                                  scene_.integrator.type == IntegratorType::PhotonMap ? "photon_map"
-                                                                                     : "progressive_photon_map"));
+                                  nameOf(kIntegratorTypeNames, scene_.integrator.type)));
     const TransmittanceEstimatorType t = scene_.integrator.transmittance.type;
     if (t == TransmittanceEstimatorType::RayMarch || t == TransmittanceEstimatorType::DebiasedRayMarch) return;
     const std::string key = find(doc, "integrator") ? "integrator.transmittance_estimator.type" : "media";

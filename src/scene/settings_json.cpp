@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "scene/enum_names.h"
 #include "scene/scene_loader.h"
 
 namespace telescope {
@@ -13,34 +14,6 @@ namespace telescope {
 using nlohmann::json;
 
 namespace {
-
-// ---- Names of the settings' enums, as the scene file spells them ----
-template <class E>
-struct Named {
-    E value;
-    const char* name;
-};
-
-constexpr Named<PmfType> kPmfTypes[] = {
-    {PmfType::Geometric, "geometric"}, {PmfType::PowerLaw, "power_law"}, {PmfType::Auto, "auto"}};
-constexpr Named<DebiasEstimator> kDebiasEstimators[] = {
-    {DebiasEstimator::SingleTerm, "single_term"}, {DebiasEstimator::Sum, "sum"}};
-constexpr Named<LevelSchedule> kLevelSchedules[] = {
-    {LevelSchedule::PerPixel, "per_pixel"}, {LevelSchedule::Uniform, "uniform"}, {LevelSchedule::Queued, "queued"}};
-constexpr Named<IntegratorType> kIntegratorTypes[] = {{IntegratorType::PathTracer, "path_tracer"},
-                                                      {IntegratorType::PhotonMap, "photon_map"},
-                                                      {IntegratorType::ProgressivePhotonMap, "progressive_photon_map"}};
-constexpr Named<PhotonKernel> kPhotonKernels[] = {
-    {PhotonKernel::Cone, "cone"}, {PhotonKernel::Uniform, "uniform"}, {PhotonKernel::Epanechnikov, "epanechnikov"}};
-constexpr Named<DirectLighting> kDirectLighting[] = {
-    {DirectLighting::Photons, "photons"}, {DirectLighting::NextEvent, "next_event"}};
-
-template <class E, size_t N>
-const char* nameOf(const Named<E> (&table)[N], E value) {
-    for (const Named<E>& n : table)
-        if (n.value == value) return n.name;
-    throw std::logic_error("a settings value without a name");
-}
 
 // Reads j[key] (when present) as one of the table's names.
 template <class E, size_t N>
@@ -63,30 +36,22 @@ void readValue(const json& j, const char* key, T& value) {
 }  // namespace
 
 const char* transmittanceEstimatorName(TransmittanceEstimatorType t) {
-    switch (t) {
-        case TransmittanceEstimatorType::RayMarch: return "ray_march";
-        case TransmittanceEstimatorType::DebiasedRayMarch: return "debiased_ray_march";
-        case TransmittanceEstimatorType::DeltaTracking: return "delta_tracking";
-        case TransmittanceEstimatorType::RatioTracking: return "ratio_tracking";
-        case TransmittanceEstimatorType::ResidualRatioTracking: return "residual_ratio_tracking";
-        case TransmittanceEstimatorType::UnbiasedRayMarch: return "unbiased_ray_march";
-        case TransmittanceEstimatorType::Taylor: return "taylor";
-    }
-    return "?";
+    return nameOf(kTransmittanceEstimatorNames, t);
 }
 
 // ---- Pmf ----
 void to_json(json& j, const PmfSettings& p) {
+    j = {{"type", nameOf(kPmfTypeNames, p.type)}};
     switch (p.type) {
-    case PmfType::Geometric: j = {{"type", "geometric"}, {"r", p.r}}; break;
-    case PmfType::PowerLaw: j = {{"type", "power_law"}, {"alpha", p.alpha}}; break;
-    case PmfType::Auto: j = {{"type", "auto"}, {"pilot_spp", p.pilotSpp}, {"pilot_levels", p.pilotLevels}}; break;
+    case PmfType::Geometric: j["r"] = p.r; break;
+    case PmfType::PowerLaw: j["alpha"] = p.alpha; break;
+    case PmfType::Auto: j["pilot_spp"] = p.pilotSpp, j["pilot_levels"] = p.pilotLevels; break;
     }
     j["origin"] = p.origin;
 }
 
 void from_json(const json& j, PmfSettings& p) {
-    readName(j, "type", kPmfTypes, p.type);
+    readName(j, "type", kPmfTypeNames, p.type);
     readValue(j, "r", p.r);
     readValue(j, "alpha", p.alpha);
     readValue(j, "pilot_spp", p.pilotSpp);
@@ -100,8 +65,8 @@ void to_json(json& j, const DebiasSettings& d) {
         j = nullptr;
         return;
     }
-    j = {{"estimator", nameOf(kDebiasEstimators, d.estimator)}, {"pmf", d.pmf}};
-    j["level_schedule"] = nameOf(kLevelSchedules, d.schedule);
+    j = {{"estimator", nameOf(kDebiasEstimatorNames, d.estimator)}, {"pmf", d.pmf}};
+    j["level_schedule"] = nameOf(kLevelScheduleNames, d.schedule);
     if (d.testPmfWeight != 1.0f) j["test_pmf_weight"] = d.testPmfWeight;
 }
 
@@ -110,9 +75,9 @@ void from_json(const json& j, DebiasSettings& d) {
         d.estimator = DebiasEstimator::None;
         return;
     }
-    readName(j, "estimator", kDebiasEstimators, d.estimator);
+    readName(j, "estimator", kDebiasEstimatorNames, d.estimator);
     if (j.contains("pmf")) from_json(j.at("pmf"), d.pmf);
-    readName(j, "level_schedule", kLevelSchedules, d.schedule);
+    readName(j, "level_schedule", kLevelScheduleNames, d.schedule);
     d.testPmfWeight = j.value("test_pmf_weight", 1.0f);  // written only when it is not 1
     readValue(j, "area_ratio", d.photon.areaRatio);
     readValue(j, "photon_growth", d.photon.photonGrowth);
@@ -132,13 +97,9 @@ void to_json(json& j, const TransmittanceEstimatorSettings& t) {
 void from_json(const json& j, TransmittanceEstimatorSettings& t) {
     if (j.contains("type")) {
         const std::string name = j.at("type").get<std::string>();
-        bool found = false;
-        for (uint32_t i = 0; i < shader::kTrEstCount; ++i)
-            if (name == transmittanceEstimatorName(TransmittanceEstimatorType(i))) {
-                t.type = TransmittanceEstimatorType(i);
-                found = true;
-            }
-        if (!found) throw std::invalid_argument(fmt::format("'type': unknown transmittance estimator '{}'", name));
+        const auto type = valueOf(kTransmittanceEstimatorNames, name);
+        if (!type) throw std::invalid_argument(fmt::format("'type': unknown transmittance estimator '{}'", name));
+        t.type = *type;
     }
     readValue(j, "level", t.level);
     readValue(j, "terms", t.terms);
@@ -151,8 +112,8 @@ void to_json(json& j, const PhotonSettings& p) {
     j = {{"photon_count", p.photonCount},
          {"gather_radius", p.gatherRadius},
          {"alpha", p.alpha},
-         {"kernel", nameOf(kPhotonKernels, p.kernel)},
-         {"direct_lighting", nameOf(kDirectLighting, p.directLighting)},
+         {"kernel", nameOf(kPhotonKernelNames, p.kernel)},
+         {"direct_lighting", nameOf(kDirectLightingNames, p.directLighting)},
          {"gather_photon_count", p.gatherCount}};
     if (!p.testRadianceScaling) j["test_radiance_scaling"] = false;
 }
@@ -161,15 +122,15 @@ void from_json(const json& j, PhotonSettings& p) {
     readValue(j, "photon_count", p.photonCount);
     readValue(j, "gather_radius", p.gatherRadius);
     readValue(j, "alpha", p.alpha);
-    readName(j, "kernel", kPhotonKernels, p.kernel);
-    readName(j, "direct_lighting", kDirectLighting, p.directLighting);
+    readName(j, "kernel", kPhotonKernelNames, p.kernel);
+    readName(j, "direct_lighting", kDirectLightingNames, p.directLighting);
     readValue(j, "gather_photon_count", p.gatherCount);
     p.testRadianceScaling = j.value("test_radiance_scaling", true);  // written only when false
 }
 
 // ---- Integrator ----
 json integratorJson(const IntegratorSettings& in, bool withTransmittance) {
-    json integrator = {{"type", nameOf(kIntegratorTypes, in.type)},
+    json integrator = {{"type", nameOf(kIntegratorTypeNames, in.type)},
                        {"min_bounces", in.minBounces},
                        {"max_bounces", in.maxBounces},
                        {"enable_light_sampling", in.enableLightSampling},
@@ -188,7 +149,7 @@ json integratorJson(const IntegratorSettings& in, bool withTransmittance) {
 }
 
 void from_json(const json& j, IntegratorSettings& s) {
-    readName(j, "type", kIntegratorTypes, s.type);
+    readName(j, "type", kIntegratorTypeNames, s.type);
     readValue(j, "min_bounces", s.minBounces);
     readValue(j, "max_bounces", s.maxBounces);
     readValue(j, "enable_light_sampling", s.enableLightSampling);

@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "core/error.h"
+#include "scene/enum_names.h"
 #include "scene/scene_loader.h"
 
 namespace telescope {
@@ -112,4 +114,32 @@ TEST(SettingsJson, BadSettingsNameTheSource) {
 }
 
 }  // namespace
+}  // namespace telescope
+
+namespace telescope {
+
+// Every enum's names live once (scene/enum_names.h): each table names each value once and reads
+// back to it, and the reader's messages list the names from the same table.
+TEST(EnumNames, EachTableRoundTripsAndNamesEveryValueOnce) {
+    auto check = [](const auto& table, size_t values) {
+        EXPECT_EQ(std::size(table), values);
+        std::set<std::string> names;
+        for (const auto& n : table) {
+            EXPECT_TRUE(names.insert(n.name).second) << n.name;
+            EXPECT_EQ(valueOf(table, n.name), n.value) << n.name;
+            EXPECT_STREQ(nameOf(table, n.value), n.name);
+        }
+        EXPECT_FALSE(valueOf(table, "no such name").has_value());
+    };
+    check(kPmfTypeNames, 3);
+    check(kDebiasEstimatorNames, 2);  // DebiasEstimator::None is the absence of a debias block
+    check(kLevelScheduleNames, 3);
+    check(kIntegratorTypeNames, 3);
+    check(kPhotonKernelNames, 3);
+    check(kDirectLightingNames, 2);
+    check(kTransmittanceEstimatorNames, size_t(shader::kTrEstCount));
+    EXPECT_EQ(expectedNames(kLevelScheduleNames), "\"per_pixel\", \"uniform\" or \"queued\"");
+    EXPECT_EQ(expectedNames(kPmfTypeNames, 2), "\"geometric\" or \"power_law\"");
+}
+
 }  // namespace telescope

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "scene/enum_names.h"
 #include "scene/photon_levels.h"
 #include "shared/gpu_types.h"
 #include "shared/transmittance_estimators.h"
@@ -111,13 +112,13 @@ void SceneReader::readIntegrator(const json& v) {
              fmt::format("unsupported integrator type '{}' (Telescope has path_tracer, photon_map and "
                          "progressive_photon_map: try --set integrator.type=\"path_tracer\")",
                          type));
-    if (type == "photon_map" || type == "progressive_photon_map") {
-        s.type = type == "photon_map" ? IntegratorType::PhotonMap : IntegratorType::ProgressivePhotonMap;
+    const std::optional<IntegratorType> integrator = valueOf(kIntegratorTypeNames, type);
+    if (!integrator) fail("integrator.type", fmt::format("unknown integrator type '{}'", type));
+    s.type = *integrator;
+    if (usesPhotons(s)) {
         readPhotonSettings(v, key);
         return;
     }
-    if (type != "path_tracer") fail("integrator.type", fmt::format("unknown integrator type '{}'", type));
-    s.type = IntegratorType::PathTracer;
 
     if (const json* n = find(v, "min_bounces")) s.minBounces = integer(*n, "integrator.min_bounces", 0, kMaxBounces);
     if (const json* n = find(v, "max_bounces")) {
@@ -181,17 +182,18 @@ void SceneReader::readPhotonSettings(const json& v, const std::string& key) {
     }
     if (const json* k = find(v, "kernel")) {
         const std::string name = string(*k, "integrator.kernel");
-        if (name == "cone") p.kernel = PhotonKernel::Cone;
-        else if (name == "uniform") p.kernel = PhotonKernel::Uniform;
-        else if (name == "epanechnikov") p.kernel = PhotonKernel::Epanechnikov;
-        else fail("integrator.kernel", fmt::format("unknown kernel '{}' (expected \"cone\", \"uniform\" or \"epanechnikov\")", name));
+        const auto kernel = valueOf(kPhotonKernelNames, name);
+        if (!kernel)
+            fail("integrator.kernel", fmt::format("unknown kernel '{}' (expected {})", name, expectedNames(kPhotonKernelNames)));
+        p.kernel = *kernel;
     }
     if (const json* d = find(v, "direct_lighting")) {
         const std::string name = string(*d, "integrator.direct_lighting");
-        if (name == "photons") p.directLighting = DirectLighting::Photons;
-        else if (name == "next_event") p.directLighting = DirectLighting::NextEvent;
-        else fail("integrator.direct_lighting",
-                  fmt::format("unknown direct lighting '{}' (expected \"photons\" or \"next_event\")", name));
+        const auto lighting = valueOf(kDirectLightingNames, name);
+        if (!lighting)
+            fail("integrator.direct_lighting",
+                 fmt::format("unknown direct lighting '{}' (expected {})", name, expectedNames(kDirectLightingNames)));
+        p.directLighting = *lighting;
     }
     if (const json* d = find(v, "debias"); d && !d->is_null()) {
         readDebias(*d, "integrator.debias", true);
@@ -241,9 +243,10 @@ void SceneReader::readPhotonBlocks(const json& v, const std::string& key) {
     if (const json* schedule = find(v, "level_schedule")) {
         const std::string scheduleKey = member(key, "level_schedule");
         const std::string name = string(*schedule, scheduleKey);
-        if (name == "uniform") d.schedule = LevelSchedule::Uniform;
-        else if (name == "per_pixel") d.schedule = LevelSchedule::PerPixel;
-        else fail(scheduleKey, fmt::format("photon mapping takes the level schedule \"uniform\" or \"per_pixel\", got '{}'", name));
+        const auto photonSchedule = valueOf(kLevelScheduleNames, name);
+        if (!photonSchedule || *photonSchedule == LevelSchedule::Queued)
+            fail(scheduleKey, fmt::format("photon mapping takes the level schedule \"uniform\" or \"per_pixel\", got '{}'", name));
+        d.schedule = *photonSchedule;
         if (d.schedule == LevelSchedule::PerPixel && scene_.integrator.type == IntegratorType::ProgressivePhotonMap)
             fail(scheduleKey, "progressive_photon_map shrinks the base radius per block, which needs the \"uniform\" schedule");
     }
@@ -289,19 +292,20 @@ void SceneReader::readDebias(const json& v, const std::string& key, bool photons
 
     const std::string estimatorKey = member(key, "estimator");
     const json* estimator = find(v, "estimator");
-    if (!estimator) fail(estimatorKey, "missing (expected \"single_term\" or \"sum\")");
+    if (!estimator) fail(estimatorKey, fmt::format("missing (expected {})", expectedNames(kDebiasEstimatorNames)));
     const std::string name = string(*estimator, estimatorKey);
-    if (name == "single_term") d.estimator = DebiasEstimator::SingleTerm;
-    else if (name == "sum") d.estimator = DebiasEstimator::Sum;
-    else fail(estimatorKey, fmt::format("unknown debias estimator '{}' (expected \"single_term\" or \"sum\")", name));
+    const auto debiasEstimator = valueOf(kDebiasEstimatorNames, name);
+    if (!debiasEstimator)
+        fail(estimatorKey, fmt::format("unknown debias estimator '{}' (expected {})", name, expectedNames(kDebiasEstimatorNames)));
+    d.estimator = *debiasEstimator;
 
     if (const json* schedule = find(v, "level_schedule"); schedule && !photons) {
         const std::string scheduleKey = member(key, "level_schedule");
         const std::string s = string(*schedule, scheduleKey);
-        if (s == "per_pixel") d.schedule = LevelSchedule::PerPixel;
-        else if (s == "uniform") d.schedule = LevelSchedule::Uniform;
-        else if (s == "queued") d.schedule = LevelSchedule::Queued;
-        else fail(scheduleKey, fmt::format("unknown level schedule '{}' (expected \"per_pixel\", \"uniform\" or \"queued\")", s));
+        const auto levelSchedule = valueOf(kLevelScheduleNames, s);
+        if (!levelSchedule)
+            fail(scheduleKey, fmt::format("unknown level schedule '{}' (expected {})", s, expectedNames(kLevelScheduleNames)));
+        d.schedule = *levelSchedule;
     }
 
     if (const json* pmf = find(v, "pmf")) d.pmf = readPmf(*pmf, member(key, "pmf"), d.pmf, true);
@@ -319,22 +323,25 @@ PmfSettings SceneReader::readPmf(const json& v, const std::string& key, PmfSetti
         return x;
     };
     pmf.origin = "given in the scene";
-    if (type == "geometric") {
-        rejectUnknownKeys(v, key, {"type", "r"});
-        pmf.type = PmfType::Geometric;
-        if (find(v, "r")) pmf.r = openUnit("r");
-    } else if (type == "power_law") {
-        rejectUnknownKeys(v, key, {"type", "alpha"});
-        pmf.type = PmfType::PowerLaw;
-        if (find(v, "alpha")) pmf.alpha = openUnit("alpha");
-    } else if (type == "auto" && allowAuto) {
-        rejectUnknownKeys(v, key, {"type", "pilot_spp", "pilot_levels"});
-        pmf.type = PmfType::Auto;
-        if (const json* s = find(v, "pilot_spp")) pmf.pilotSpp = integer(*s, member(key, "pilot_spp"), 1, 1024);
-        if (const json* l = find(v, "pilot_levels")) pmf.pilotLevels = integer(*l, member(key, "pilot_levels"), 3, 32);
-    } else {
-        fail(member(key, "type"), allowAuto ? fmt::format("unknown pmf type '{}' (expected \"geometric\", \"power_law\" or \"auto\")", type)
-                                            : fmt::format("unknown pmf type '{}' (expected \"geometric\" or \"power_law\")", type));
+    const std::optional<PmfType> pmfType = valueOf(kPmfTypeNames, type);
+    if (!pmfType || (*pmfType == PmfType::Auto && !allowAuto))
+        fail(member(key, "type"), fmt::format("unknown pmf type '{}' (expected {})", type,
+                                              expectedNames(kPmfTypeNames, allowAuto ? 3 : 2)));
+    pmf.type = *pmfType;
+    switch (*pmfType) {
+        case PmfType::Geometric:
+            rejectUnknownKeys(v, key, {"type", "r"});
+            if (find(v, "r")) pmf.r = openUnit("r");
+            break;
+        case PmfType::PowerLaw:
+            rejectUnknownKeys(v, key, {"type", "alpha"});
+            if (find(v, "alpha")) pmf.alpha = openUnit("alpha");
+            break;
+        case PmfType::Auto:
+            rejectUnknownKeys(v, key, {"type", "pilot_spp", "pilot_levels"});
+            if (const json* s = find(v, "pilot_spp")) pmf.pilotSpp = integer(*s, member(key, "pilot_spp"), 1, 1024);
+            if (const json* l = find(v, "pilot_levels")) pmf.pilotLevels = integer(*l, member(key, "pilot_levels"), 3, 32);
+            break;
     }
     return pmf;
 }
@@ -385,16 +392,11 @@ void SceneReader::readTransmittanceEstimator(const json& v, const std::string& k
     const std::string typeKey = member(key, "type");
     if (!find(v, "type")) fail(typeKey, "missing");
     const std::string type = string(v["type"], typeKey);
-    bool found = false;
-    for (uint32_t i = 0; i < shader::kTrEstCount; ++i)
-        if (type == transmittanceEstimatorName(TransmittanceEstimatorType(i))) {
-            t.type = TransmittanceEstimatorType(i);
-            found = true;
-        }
-    if (!found)
-        fail(typeKey, fmt::format("unknown transmittance estimator '{}' (expected ray_march, debiased_ray_march, "
-                                  "delta_tracking, ratio_tracking, residual_ratio_tracking, unbiased_ray_march or taylor)",
-                                  type));
+    const auto estimator = valueOf(kTransmittanceEstimatorNames, type);
+    if (!estimator)
+        fail(typeKey, fmt::format("unknown transmittance estimator '{}' (expected {})", type,
+                                  expectedNames(kTransmittanceEstimatorNames)));
+    t.type = *estimator;
     if (const json* l = find(v, "level")) t.level = integer(*l, member(key, "level"), 0, 16);
     if (const json* n = find(v, "terms")) {
         if (t.type != TransmittanceEstimatorType::Taylor) fail(member(key, "terms"), "only the 'taylor' estimator has terms");
