@@ -259,7 +259,7 @@ double slabPilotMoment(const Scene& scene, uint32_t k, uint32_t m) {
 // level off by one (E[D^2] falls ~16x per level) and a correction weighted by 2 (4x).
 TEST_F(MediaRender, TransmittancePilotMeasuresTheMarchingCorrection) {
     Scene scene = slabScene(exponentialModel(), R"({"type":"debiased_ray_march","level":1,
-                                                     "pmf":{"type":"auto","pilot_spp":8,"pilot_levels":4}})");
+                                                     "pmf":{"type":"auto","pilot_spp":4,"pilot_levels":4}})");
     ASSERT_EQ(scene.integrator.transmittance.pmf.type, PmfType::Auto);
     const PmfPilotResult pilot = runTransmittancePmfPilot(sharedContext(), scene, 61);
     ASSERT_EQ(pilot.levels.size(), 4u);

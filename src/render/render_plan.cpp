@@ -19,16 +19,7 @@ std::string pmfDescription(const PmfSettings& pmf) {
     return fmt::format("power-law pmf, alpha = {:g}", pmf.alpha);
 }
 
-uint32_t filterConstant(const Camera& camera) {
-    const std::pair<const char*, uint32_t> filters[] = {
-        {"dirac", shader::kFilterDirac},         {"box", shader::kFilterBox},
-        {"tent", shader::kFilterTent},           {"gaussian", shader::kFilterGaussian},
-        {"mitchell_netravali", shader::kFilterMitchellNetravali}, {"catmull_rom", shader::kFilterCatmullRom},
-        {"lanczos", shader::kFilterLanczos}};
-    for (const auto& [name, constant] : filters)
-        if (camera.filter == name) return constant;
-    throw std::logic_error("unknown reconstruction filter '" + camera.filter + "' (the scene loader rejects it)");
-}
+uint32_t filterConstant(const Camera& camera) { return uint32_t(camera.filter); }
 
 RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f, uint32_t pilotLevel, PilotKind pilotKind) {
     RenderPlan plan;

@@ -42,6 +42,15 @@ inline constexpr Named<TransmittanceEstimatorType> kTransmittanceEstimatorNames[
     {TransmittanceEstimatorType::UnbiasedRayMarch, "unbiased_ray_march"},
     {TransmittanceEstimatorType::Taylor, "taylor"}};
 
+inline constexpr Named<PixelFilter> kPixelFilterNames[] = {
+    {PixelFilter::Dirac, "dirac"},
+    {PixelFilter::Box, "box"},
+    {PixelFilter::Tent, "tent"},
+    {PixelFilter::Gaussian, "gaussian"},
+    {PixelFilter::MitchellNetravali, "mitchell_netravali"},
+    {PixelFilter::CatmullRom, "catmull_rom"},
+    {PixelFilter::Lanczos, "lanczos"}};
+
 template <class E, size_t N>
 const char* nameOf(const Named<E> (&table)[N], E value) {
     for (const Named<E>& n : table)

@@ -192,6 +192,13 @@ struct PointLikeLight {
     std::string name;
 };
 
+// The camera's reconstruction filter (shared/pixel_filter.h; values from shared/enums.h).
+enum class PixelFilter : uint32_t {
+    Box = shader::kFilterBox, Tent = shader::kFilterTent, Dirac = shader::kFilterDirac,
+    Gaussian = shader::kFilterGaussian, MitchellNetravali = shader::kFilterMitchellNetravali,
+    CatmullRom = shader::kFilterCatmullRom, Lanczos = shader::kFilterLanczos
+};
+
 struct Camera {
     glm::vec3 position{0.0f, 0.0f, 0.0f};
     glm::vec3 forward{0.0f, 0.0f, 1.0f};  // unit, z axis of Tungsten's camera basis
@@ -199,7 +206,7 @@ struct Camera {
     glm::vec3 right{1.0f, 0.0f, 0.0f};    // unit, image right = forward x up (Tungsten)
     float fovDegrees = 60.0f;             // horizontal full angle
     uint32_t width = 512, height = 512;
-    std::string filter = "tent";          // reconstruction filter (render_plan.h filterConstant)
+    PixelFilter filter = PixelFilter::Tent;  // reconstruction filter (names: scene/enum_names.h)
     int32_t medium = -1;                  // index into Scene::media, -1 = vacuum
 };
 

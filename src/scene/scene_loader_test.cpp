@@ -114,7 +114,7 @@ TEST(SceneLoader, CornellBoxSettings) {
     EXPECT_EQ(s.camera.width, 1000u);
     EXPECT_EQ(s.camera.height, 563u);
     EXPECT_FLOAT_EQ(s.camera.fovDegrees, 35.0f);
-    EXPECT_EQ(s.camera.filter, "tent");
+    EXPECT_EQ(s.camera.filter, PixelFilter::Tent);
     expectVec(s.camera.position, {0, 1, 6.8f});
     expectVec(s.camera.forward, {0, 0, -1});
     expectVec(s.camera.up, {0, 1, 0});

@@ -1,6 +1,8 @@
 // The scene reader's typed values, key bookkeeping and top level (scene_reader.h).
 #include "scene/scene_reader.h"
 
+#include "scene/enum_names.h"
+
 #include <array>
 #include <cmath>
 
@@ -167,9 +169,11 @@ void SceneReader::read(const json& doc) {
     if (const json* renderer = find(doc, "renderer")) readRenderer(*renderer);
     checkEstimatorFitsMedia(doc);
     // The photon gather pass samples dirac, box and tent only; the wide filters are path tracing's.
-    if (usesPhotons(scene_.integrator) && !isOneOf({"dirac", "box", "tent"}, scene_.camera.filter))
-        fail("camera.reconstruction_filter",
-             fmt::format("photon mapping supports the dirac, box and tent filters, not '{}'", scene_.camera.filter));
+    const PixelFilter filter = scene_.camera.filter;
+    if (usesPhotons(scene_.integrator) && filter != PixelFilter::Dirac && filter != PixelFilter::Box &&
+        filter != PixelFilter::Tent)
+        fail("camera.reconstruction_filter", fmt::format("photon mapping supports the dirac, box and tent filters, not '{}'",
+                                                         nameOf(kPixelFilterNames, filter)));
     // Photon tracing and the gather implement the materials of photonsSupport() only.
     if (usesPhotons(scene_.integrator))
         for (const Material& m : scene_.materials)

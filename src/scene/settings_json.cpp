@@ -164,7 +164,7 @@ json resolvedSettings(const Scene& scene) {
     return {{"integrator", integratorJson(scene.integrator, !scene.media.empty())},
             {"camera", {{"resolution", {scene.camera.width, scene.camera.height}},
                         {"fov", scene.camera.fovDegrees},
-                        {"reconstruction_filter", scene.camera.filter}}}};
+                        {"reconstruction_filter", nameOf(kPixelFilterNames, scene.camera.filter)}}}};
 }
 
 void applySettings(Scene& scene, const json& settings, const std::string& source) {
@@ -183,7 +183,7 @@ void applySettings(Scene& scene, const json& settings, const std::string& source
                 scene.camera.height = c.at("resolution").at(1).get<uint32_t>();
             }
             readValue(c, "fov", scene.camera.fovDegrees);
-            readValue(c, "reconstruction_filter", scene.camera.filter);
+            readName(c, "reconstruction_filter", kPixelFilterNames, scene.camera.filter);
         }
     } catch (const std::exception& e) {
         throw InputError(source, key, fmt::format("bad settings: {}", e.what()));

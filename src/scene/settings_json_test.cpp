@@ -39,7 +39,7 @@ Scene allDifferent() {
     s.camera.width = 3;
     s.camera.height = 5;
     s.camera.fovDegrees = 11.0f;
-    s.camera.filter = "lanczos";
+    s.camera.filter = PixelFilter::Lanczos;
     return s;
 }
 
@@ -138,6 +138,7 @@ TEST(EnumNames, EachTableRoundTripsAndNamesEveryValueOnce) {
     check(kPhotonKernelNames, 3);
     check(kDirectLightingNames, 2);
     check(kTransmittanceEstimatorNames, size_t(shader::kTrEstCount));
+    check(kPixelFilterNames, 7);
     EXPECT_EQ(expectedNames(kLevelScheduleNames), "\"per_pixel\", \"uniform\" or \"queued\"");
     EXPECT_EQ(expectedNames(kPmfTypeNames, 2), "\"geometric\" or \"power_law\"");
 }

@@ -50,8 +50,6 @@ constexpr std::string_view kUnsupportedCameras[] = {"thinlens", "equirectangular
 constexpr std::string_view kUnsupportedIntegrators[] = {
     "bidirectional_path_tracer", "light_tracer",
     "kelemen_mlt", "multiplexed_mlt", "reversible_jump_mlt"};
-constexpr std::string_view kFilters[] = {
-    "dirac", "box", "tent", "gaussian", "mitchell_netravali", "catmull_rom", "lanczos"};
 
 }  // namespace
 
@@ -81,9 +79,12 @@ void SceneReader::readCamera(const json& v) {
         }
     }
     if (const json* filter = find(v, "reconstruction_filter")) {
-        cam.filter = string(*filter, "camera.reconstruction_filter");
-        if (!isOneOf(kFilters, cam.filter))
-            fail("camera.reconstruction_filter", fmt::format("unknown reconstruction filter '{}'", cam.filter));
+        const std::string name = string(*filter, "camera.reconstruction_filter");
+        const auto pixelFilter = valueOf(kPixelFilterNames, name);
+        if (!pixelFilter)
+            fail("camera.reconstruction_filter",
+                 fmt::format("unknown reconstruction filter '{}' (expected {})", name, expectedNames(kPixelFilterNames)));
+        cam.filter = *pixelFilter;
     }
 
     // Basis: z = forward, y = up; image right = forward x up (Tungsten negates its basis x)
