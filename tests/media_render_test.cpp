@@ -129,6 +129,29 @@ TEST_F(MediaRender, TaylorMatchesTheSlabAndTheDebiasedDavisSmoke) {
     // The slab against its closed form (exponential and Davis), as every unbiased estimator above.
     expectMatchesClosedForm(exponentialModel(), R"({"type":"taylor"})", 64, 41);
     expectMatchesClosedForm(davisModel(), R"({"type":"taylor"})", 64, 42);
+    {
+        // Zero variance where every depth estimate equals the pivot: through the constant slab
+        // (top half; dirac filter, one ray per pixel) each pixel's samples agree, so its sample
+        // variance is ~0, not just its mean right. ~0 means the film's rounding: it sums Z^2 in
+        // float, 2^-24 of Z^2 per sample, which E[Z^2] - E[Z]^2 keeps (measured: at most 7e-7 of
+        // the mean^2, about half the pixels exactly 0, and the same for biased 2-point marching,
+        // which is exact there). Control: the falloff slab's pixels (bottom half), 7e-4 and up.
+        const Scene slab = slabScene(davisModel(), R"({"type":"taylor"})");
+        const Film f = renderFilm(slab, 16, 45);
+        double constantWorst = 0.0, falloffLeast = 1e300;
+        for (uint32_t y = 0; y < slab.camera.height; ++y)
+            for (uint32_t x = 0; x < slab.camera.width; ++x) {
+                const size_t i = size_t(y) * slab.camera.width + x;
+                const double m = f.mean(shader::kChannelEstimate, i).x;
+                const double relative = f.varianceOfMean(i).x * 16.0 / (m * m);  // per-sample variance / mean^2
+                if (y < slab.camera.height / 2) constantWorst = std::max(constantWorst, relative);
+                else falloffLeast = std::min(falloffLeast, relative);
+            }
+        std::printf("taylor, sample variance / mean^2: constant slab at most %.3g, falloff slab at least %.3g\n",
+                    constantWorst, falloffLeast);
+        EXPECT_LT(constantWorst, 2e-6) << "the constant slab's pixels must have ~0 variance";
+        EXPECT_GT(falloffLeast, 1e-6) << "control: the falloff slab's pixels vary";
+    }
     // The smoke box with Davis transmittance (exponential falloff, multiple scattering): taylor
     // against debiased marching, two independent unbiased renders, per 4x4 block (their
     // difference's own standard error). The density is monotone along every ray, so the combs'
