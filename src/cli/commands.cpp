@@ -634,12 +634,12 @@ int runPlan(const CommonOptions& common, const DerivativeCli& derivative) {
         Scene resolved = scene;
         const std::vector<PmfPilotResult> pilots = resolveAutoPmfs(context, resolved, kDefaultSeed);
         fmt::print("pmf pilots (seed {}; a render runs them again with its own seed, and timings vary):\n", kDefaultSeed);
-        for (const PmfPilotResult& pilot : pilots) fmt::print("{}", pilot.summary());
-        if (scene.integrator.debias.pmf.type == PmfType::Auto && scene.integrator.debias.estimator != DebiasEstimator::None)
-            fmt::print("path-depth pmf: {}\n", pmfDescription(resolved.integrator.debias.pmf));
-        if (scene.integrator.transmittance.pmf.type == PmfType::Auto)
-            fmt::print("transmittance pmf: {}; {}\n", pmfDescription(resolved.integrator.transmittance.pmf),
-                       resolved.integrator.transmittance.pmf.origin);
+        for (const PmfPilotResult& pilot : pilots) {
+            const bool marching = pilot.kind == PilotKind::Transmittance;
+            const PmfSettings& p = marching ? resolved.integrator.transmittance.pmf : resolved.integrator.debias.pmf;
+            fmt::print("{}{} pmf: {}; {}\n", pilot.summary(), marching ? "transmittance" : "path-depth", pmfDescription(p),
+                       p.origin);
+        }
     }
     return 0;
 }

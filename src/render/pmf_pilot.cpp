@@ -230,7 +230,6 @@ PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t
     s.integrator.debias.estimator = DebiasEstimator::SingleTerm;
     s.integrator.debias.pmf = PmfSettings{};
     s.integrator.debias.schedule = LevelSchedule::PerPixel;
-    if (s.integrator.transmittance.pmf.type == PmfType::Auto) s.integrator.transmittance.pmf = defaultTransmittancePmf();
     Renderer r(context, s, seed + 7919u, /*pilotLevel=*/0);
     std::vector<glm::dvec3> weight;
     double pixels = 0.0;
@@ -309,7 +308,6 @@ PmfPilotResult runTransmittancePmfPilot(gpu::Context& context, const Scene& scen
     std::vector<double> d2(pixelCount);
     for (uint32_t m = 0; m < levels; ++m) {
         std::fill(d2.begin(), d2.end(), 0.0);
-        double seconds = 0.0;
         for (uint32_t i = 0; i < spp; ++i) {
             r.restartAtPilotLevel(m);
             const std::vector<glm::vec4> once = r.renderSample(i);
@@ -337,7 +335,7 @@ PmfPilotResult runTransmittancePmfPilot(gpu::Context& context, const Scene& scen
         RenderRequest req;
         req.spp = spp;
         r.render(req);
-        seconds = gpuSeconds(r.stats());
+        const double seconds = gpuSeconds(r.stats());
         result.pilotGpuSeconds += seconds;
         result.pilotWallSeconds += r.stats().wallSeconds;
 
@@ -406,12 +404,9 @@ std::string PmfPilotResult::summary() const {
 
 std::vector<PmfPilotResult> resolveAutoPmfs(gpu::Context& context, Scene& scene, uint32_t seed) {
     std::vector<PmfPilotResult> pilots;
-    DebiasSettings& d = scene.integrator.debias;
-    if (d.estimator != DebiasEstimator::None && d.pmf.type == PmfType::Auto) {
-        pilots.push_back(runPmfPilot(context, scene, seed));
-        d.pmf = pilots.back().chosen.pmf;
-        d.pmf.origin = "chosen by the auto pilot: the lowest predicted work x variance over geometric and power-law pmfs";
-    }
+    const char* chosen = "chosen by the auto pilot: the lowest predicted work x variance over geometric and power-law pmfs";
+    // Transmittance first: its pilot traces paths to the base depth only, and the path-depth
+    // pilot then renders with the transmittance pmf the render will use.
     TransmittanceEstimatorSettings& t = scene.integrator.transmittance;
     if (t.type == TransmittanceEstimatorType::DebiasedRayMarch && t.pmf.type == PmfType::Auto) {
         if (scene.media.empty()) {
@@ -420,9 +415,14 @@ std::vector<PmfPilotResult> resolveAutoPmfs(gpu::Context& context, Scene& scene,
         } else {
             pilots.push_back(runTransmittancePmfPilot(context, scene, seed));
             t.pmf = pilots.back().chosen.pmf;
-            t.pmf.origin = "chosen by the auto pilot: the lowest predicted work x variance over geometric and "
-                           "power-law pmfs";
+            t.pmf.origin = chosen;
         }
+    }
+    DebiasSettings& d = scene.integrator.debias;
+    if (d.estimator != DebiasEstimator::None && d.pmf.type == PmfType::Auto) {
+        pilots.push_back(runPmfPilot(context, scene, seed));
+        d.pmf = pilots.back().chosen.pmf;
+        d.pmf.origin = chosen;
     }
     return pilots;
 }

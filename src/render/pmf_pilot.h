@@ -102,10 +102,11 @@ PmfCandidate predictPmf(const PmfPilotResult& pilot, const PmfSettings& pmf, Deb
 // geometric r or power-law alpha (0.02 to 0.98) with the smallest predicted variance x cost.
 void choosePmf(PmfPilotResult& pilot, DebiasEstimator estimator);
 
-// Resolves every pmf "auto" of the scene (the path-depth pmf, debiased ray marching's pmf): runs
-// each one's pilot and puts the chosen pmf in the scene. Returns the pilots that ran, in that
-// order (none when the scene has no "auto"). A transmittance "auto" in a scene without media
-// has nothing to measure and becomes the default pmf (it cannot change the image).
+// Resolves every pmf "auto" of the scene (debiased ray marching's pmf, then the path-depth pmf,
+// whose pilot so renders with the transmittance pmf the render will use): runs each one's pilot
+// and puts the chosen pmf in the scene. Returns the pilots that ran, in that order (none when the
+// scene has no "auto"). A transmittance "auto" in a scene without media has nothing to measure
+// and becomes the default pmf (it cannot change the image).
 std::vector<PmfPilotResult> resolveAutoPmfs(gpu::Context& context, Scene& scene, uint32_t seed);
 
 }  // namespace telescope

@@ -3,6 +3,7 @@
 // (settings_json.cpp) and by every text that names a value (plan, metadata).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <optional>
 #include <stdexcept>
