@@ -14,11 +14,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
+#include <filesystem>
 #include <vector>
 
 #include <fmt/format.h>
 
 #include "region_stats.h"
+#include "render/film_io.h"
 #include "render/photon_map.h"
 #include "render/renderer.h"
 #include "render_harness.h"
@@ -366,4 +368,126 @@ TEST_F(PhotonRender, PhotonsReadByAddressGiveTheSameFilm) {
         lit += x.x > 0.0;
     }
     EXPECT_GT(lit, a.pixelCount() / 2);
+}
+
+namespace {
+
+// The largest difference of two films' sums (every channel and component), relative to |b| + floor.
+double largestSumDifference(const Film& a, const Film& b, double floor) {
+    double worst = 0.0;
+    for (uint32_t c = 0; c < shader::kChannelCount; ++c)
+        for (size_t i = 0; i < a.pixelCount(); ++i)
+            for (int k = 0; k < 4; ++k) {
+                const double x = a.sums(c)[i][k], y = b.sums(c)[i][k];
+                worst = std::max(worst, std::abs(x - y) / (std::abs(y) + floor));
+            }
+    return worst;
+}
+
+// A render of `spp` samples stopped before its `stopAt`-th batch (a signal): its film, with the
+// samples in progress.
+Film interruptedFilm(const Scene& scene, uint32_t seed, uint64_t spp, uint32_t stopAt) {
+    Renderer renderer(sharedContext(), scene, seed);
+    RenderRequest request;
+    request.spp = spp;
+    uint32_t asked = 0;
+    request.stop = [&] { return ++asked > stopAt; };
+    renderer.render(request);
+    return renderer.film();
+}
+
+// The film of `film`'s render continued to `spp` samples, through a checkpoint file; the photon
+// passes the continuation ran in *passes.
+Film resumedFilm(const Scene& scene, uint32_t seed, const Film& film, uint64_t spp, uint64_t* passes) {
+    const std::string path = (std::filesystem::temp_directory_path() / "telescope-pending-block.ckpt").string();
+    saveCheckpoint(path, Checkpoint{film, seed, "{}", "", "", {seed}});
+    const Film restored = loadCheckpoint(path).film;
+    std::filesystem::remove(path);
+    Renderer renderer(sharedContext(), scene, seed);
+    renderer.resume(restored);
+    RenderRequest request;
+    request.spp = spp - restored.samplesPerPixel();
+    renderer.render(request);
+    if (passes) *passes = renderer.stats().photonPasses;
+    return renderer.film();
+}
+
+}  // namespace
+
+TEST_F(PhotonRender, AnInterruptedBlockResumesWhereItStopped) {
+    // Uniform schedule: a level-k block is 3^k photon passes, one sample. A render stopped inside
+    // a long block keeps the block's passes and sums (Film::pending, saved in the checkpoint);
+    // resumed, it equals the uninterrupted render up to float rounding (the scatter's atomics order
+    // each bucket's photons differently in every run: two uninterrupted renders differ as much) and
+    // traces no pass twice. Controls: the block's sums lost (the passes done are kept) fail the
+    // equality; the whole block dropped passes it (the same random numbers restart the block) but
+    // traces the interrupted passes again, which a time-limited Slurm task may never get past.
+    Scene scene = plane(R"({"type":"photon_map","photon_count":4000,"gather_radius":0.5,"direct_lighting":"photons",
+                            "debias":{"estimator":"single_term"}})");
+    uint32_t seed = 1;
+    while (photonBlockLevel(scene.integrator.debias, 0, seed) < 2) ++seed;  // block 0: 9 passes or more
+    const uint64_t blocks = 3;
+    Renderer whole(sharedContext(), scene, seed);
+    RenderRequest request;
+    request.spp = blocks;
+    whole.render(request);
+    const Film wholeFilm = whole.film();
+    EXPECT_TRUE(wholeFilm.pending().empty()) << "a render that ran its blocks to the end has none in progress";
+    const Film again = renderFilm(scene, blocks, seed);
+    const double floor = 1e-3;
+    const double rounding = largestSumDifference(again, wholeFilm, floor);
+
+    const Film part = interruptedFilm(scene, seed, blocks, 4);
+    ASSERT_EQ(part.samplesPerPixel(), 0u);
+    const PendingSamples& p = part.pending();
+    ASSERT_GT(p.unitsDone, 0u);
+    ASSERT_LT(p.unitsDone, p.unitsTotal);
+    EXPECT_EQ(p.level, photonBlockLevel(scene.integrator.debias, 0, seed));
+    uint64_t passes = 0;
+    const Film resumed = resumedFilm(scene, seed, part, blocks, &passes);
+    const double tolerance = std::max(1e-5, 10.0 * rounding);
+    std::printf("two uninterrupted renders differ by %.3g, the resumed one by %.3g (tolerance %.3g)\n", rounding,
+                largestSumDifference(resumed, wholeFilm, floor), tolerance);
+    EXPECT_LT(largestSumDifference(resumed, wholeFilm, floor), tolerance);
+    EXPECT_EQ(passes + p.unitsDone, whole.stats().photonPasses) << "passes traced twice or skipped";
+
+    Film lostSums = part;
+    PendingSamples zeroed = part.pending();
+    std::fill(zeroed.device.begin(), zeroed.device.end(), uint8_t(0));
+    lostSums.setPending(zeroed);
+    EXPECT_GT(largestSumDifference(resumedFilm(scene, seed, lostSums, blocks, nullptr), wholeFilm, floor), 100 * tolerance)
+        << "the control (the block's sums lost) passed";
+    Film dropped = part;
+    dropped.setPending({});
+    uint64_t droppedPasses = 0;
+    EXPECT_LT(largestSumDifference(resumedFilm(scene, seed, dropped, blocks, &droppedPasses), wholeFilm, floor), tolerance);
+    EXPECT_EQ(droppedPasses, whole.stats().photonPasses) << "dropping the block retraces its passes";
+
+    // A block that is not this render's (another seed draws another level for block 0) is refused.
+    uint32_t other = seed + 1;
+    while (photonBlockLevel(scene.integrator.debias, 0, other) == p.level) ++other;
+    Renderer wrong(sharedContext(), scene, other);
+    EXPECT_THROW(wrong.resume(part), std::invalid_argument);
+}
+
+TEST_F(PhotonRender, PerPixelBlocksResumeWhereTheyStopped) {
+    // per_pixel: every pixel keeps its own block across passes. Resumed with them, the render
+    // equals the uninterrupted one; without them (the control) each pixel starts a new block at
+    // the resumed pass, and the pixels differ.
+    Scene scene = plane(R"({"type":"photon_map","photon_count":4000,"gather_radius":0.5,"direct_lighting":"photons",
+                            "debias":{"estimator":"single_term","level_schedule":"per_pixel"}})");
+    const uint32_t seed = 21;
+    const uint64_t passes = 24;
+    const Film wholeFilm = renderFilm(scene, passes, seed);
+    const double floor = 1e-3;
+    const double tolerance = std::max(1e-5, 10.0 * largestSumDifference(renderFilm(scene, passes, seed), wholeFilm, floor));
+    const Film part = interruptedFilm(scene, seed, passes, 11);
+    ASSERT_GT(part.samplesPerPixel(), 0u);
+    ASSERT_LT(part.samplesPerPixel(), passes);
+    ASSERT_FALSE(part.pending().device.empty());
+    EXPECT_LT(largestSumDifference(resumedFilm(scene, seed, part, passes, nullptr), wholeFilm, floor), tolerance);
+    Film dropped = part;
+    dropped.setPending({});
+    EXPECT_GT(largestSumDifference(resumedFilm(scene, seed, dropped, passes, nullptr), wholeFilm, floor), 100 * tolerance)
+        << "the control (blocks dropped) passed";
 }

@@ -248,6 +248,30 @@ void checkSameEstimator(const Checkpoint& c, const std::string& path, const Rend
                                                c.estimator, renderer.plan().estimator));
 }
 
+// Continues the checkpoint's render, with its block in progress; a state this render could not
+// have left is bad input naming the file.
+void resumeFrom(Renderer& renderer, const Checkpoint& c, const std::string& path) {
+    checkSameEstimator(c, path, renderer);
+    try {
+        renderer.resume(c.film);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(path, "", fmt::format("cannot resume: {}", e.what()));
+    }
+}
+
+// A time-limited render stopped at its deadline inside a photon block (--time-policy deadline).
+void reportDeadlineBlock(const Film& film, const std::string& checkpointPath, bool quiet) {
+    const PendingSamples& b = film.pending();
+    if (b.unitsDone == 0 || quiet) return;
+    fmt::print(stderr,
+               "telescope: stopped at the deadline inside block {} (level {}, {} of {} photon passes): the image holds "
+               "the {} completed blocks, which lean towards short, low-level blocks ('telescope plan --time' says by "
+               "how much); {}\n",
+               film.samplesPerPixel(), b.level, b.unitsDone, b.unitsTotal, film.samplesPerPixel(),
+               checkpointPath.empty() ? "its passes are lost (no --checkpoint)"
+                                      : "the checkpoint " + checkpointPath + " keeps the block for --resume");
+}
+
 void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Context& context, const Renderer& renderer,
                     const Film& film) {
     const RenderStats& stats = renderer.stats();
@@ -402,14 +426,14 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
         if (!common.quiet) fmt::print(stderr, "{}", pilot.summary());
     Renderer renderer(context, scene, o.seed);
     if (resume) {
-        checkSameEstimator(*resume, o.resumePath, renderer);
-        renderer.resume(resume->film);
+        resumeFrom(renderer, *resume, o.resumePath);
     }
     const OutputInfo info{scene.path, scene.document.dump(), renderer.plan().estimator, context.info().name,
                           resolvedSettings(scene).dump(), o.seed, 0.0};
 
     RenderRequest request;
     request.timeLimit = o.timeLimit;
+    request.finishSampleAtTimeLimit = o.timePolicy != "deadline";
     request.spp = o.timeLimit > 0 ? 0 : (o.spp ? o.spp : scene.renderer.spp);
     ProgressReporter progress(common.quiet, "render");
     PeriodicCheckpoint periodic(o.checkpointEvery, o.output.checkpointPath,
@@ -435,6 +459,7 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
                                    (o.output.checkpointPath.empty() ? o.output.exrPath + ".checkpoint"
                                                                     : o.output.checkpointPath));
     writeImages(o.output, film, done);
+    reportDeadlineBlock(film, o.output.checkpointPath, common.quiet);
     if (!o.statsPath.empty()) writeStatsJson(o.statsPath, scene, context, renderer, film);
     if (!common.quiet) {
         const double paths = double(stats.samplesPerPixel - resumedSpp) * double(film.pixelCount());
@@ -485,8 +510,7 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
     gpu::Context context(contextOptions(common));
     Renderer renderer(context, scene, o.seed);
     if (resume) {
-        checkSameEstimator(*resume, o.output.checkpointPath, renderer);
-        renderer.resume(resume->film);
+        resumeFrom(renderer, *resume, o.output.checkpointPath);
     }
     const OutputInfo info{scene.path,          scene.document.dump(),           renderer.plan().estimator,
                           context.info().name, resolvedSettings(scene).dump(), o.seed,

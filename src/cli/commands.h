@@ -40,6 +40,9 @@ struct RenderOptions {
     ImageOutputOptions output;
     uint64_t spp = 0;        // 0: the scene's renderer.spp
     double timeLimit = 0.0;  // seconds, instead of spp
+    // --time-policy: "finish-block" (default) finishes a photon block running at the time limit;
+    // "deadline" stops there and keeps the block in the checkpoint (RenderRequest).
+    std::string timePolicy = "finish-block";
     uint32_t seed = kDefaultSeed;
     bool seedGiven = false;  // with --resume the checkpoint's seed is used unless --seed says otherwise
     std::string statsPath;

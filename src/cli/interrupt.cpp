@@ -70,16 +70,28 @@ void PeriodicCheckpoint::afterBatch() {
 int saveInterrupted(ImageOutputOptions o, const Film& film, const OutputInfo& info, uint64_t newSamples,
                     const std::string& howToContinue) {
     const char* sig = InterruptGuard::signalName();
-    if (newSamples == 0) {
+    const PendingSamples& block = film.pending();
+    if (newSamples == 0 && block.unitsDone == 0) {
         fmt::print(stderr, "telescope: {}: interrupted before a sample was completed; nothing saved\n", sig);
         return InterruptGuard::exitCode();
     }
     if (o.checkpointPath.empty()) o.checkpointPath = o.exrPath + ".checkpoint";
-    writeImages(o, film, info);
+    const std::string inProgress =
+        block.unitsDone ? fmt::format(" (with block {} in progress: level {}, {} of {} photon passes)",
+                                      film.samplesPerPixel(), block.level, block.unitsDone, block.unitsTotal)
+                        : std::string();
     // Printed even with -q: files changed.
-    fmt::print(stderr, "telescope: {}: saved {} spp ({} new) to {}{} and the checkpoint {}; {}\n", sig,
+    if (film.samplesPerPixel() == 0) {
+        // Only a block in progress: nothing to show yet, but its passes are kept.
+        saveCheckpoint(o.checkpointPath, checkpointOf(film, info));
+        fmt::print(stderr, "telescope: {}: no sample completed yet, so no image; saved the checkpoint {}{}; {}\n", sig,
+                   o.checkpointPath, inProgress, howToContinue);
+        return InterruptGuard::exitCode();
+    }
+    writeImages(o, film, info);
+    fmt::print(stderr, "telescope: {}: saved {} spp ({} new) to {}{} and the checkpoint {}{}; {}\n", sig,
                film.samplesPerPixel(), newSamples, o.exrPath, o.noPng ? "" : ", " + o.pngPath, o.checkpointPath,
-               howToContinue);
+               inProgress, howToContinue);
     return InterruptGuard::exitCode();
 }
 

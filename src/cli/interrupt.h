@@ -1,7 +1,7 @@
 // SIGINT and SIGTERM during `render` and `reference`: the first signal asks the render to stop
-// after the running batch (a photon block in progress is abandoned: nothing of it was
-// accumulated); the command then writes the EXR, the PNG and a checkpoint of every completed
-// sample and exits with 128 + the signal (130, 143). A second signal ends the process at once
+// after the running batch (a photon pass); the command then writes the EXR and the PNG of every
+// completed sample and a checkpoint that also keeps a photon block in progress (Film::pending:
+// --resume continues it at its next pass), and exits with 128 + the signal (130, 143). A second signal ends the process at once
 // (default action); the atomic writes (core/atomic_file.h) leave no half-written output.
 #pragma once
 
@@ -47,7 +47,8 @@ private:
 // After a render stopped on a signal: writes the EXR, the PNG and the checkpoint (the
 // --checkpoint file, or OUT.exr.checkpoint) of every completed sample, says what it saved and
 // returns the exit code (130 for SIGINT, 143 for SIGTERM). Writes nothing when the render had
-// added no sample yet.
+// added no sample and has no block in progress; only the checkpoint when it has a block in
+// progress but no completed sample.
 // howToContinue ends the message, e.g. "continue with --resume a.exr.checkpoint".
 int saveInterrupted(ImageOutputOptions o, const Film& film, const OutputInfo& info, uint64_t newSamples,
                     const std::string& howToContinue);

@@ -60,6 +60,11 @@ int main(int argc, char** argv) {
     addImageOutput(render, renderOptions.output, "Also write the exact render state here (to resume or merge)");
     addBudget(render, renderOptions.spp, renderOptions.timeLimit, "Samples per pixel (default: renderer.spp)",
               "Render for this many seconds instead of a fixed spp");
+    render->add_option("--time-policy", renderOptions.timePolicy,
+                       "With --time: finish-block (default; a photon block running at the limit is finished, which "
+                       "can overrun) or deadline (stop at the limit; the block goes to the checkpoint, and the image "
+                       "of the completed blocks leans towards short blocks: see 'telescope plan --time')")
+        ->check(CLI::IsMember({"finish-block", "deadline"}));
     auto* seedOpt = render->add_option("--seed", renderOptions.seed, "Random seed");
     render->add_option("--stats-json", renderOptions.statsPath, "Write per-pass times, dispatch counts and device here");
     render->add_option("--resume", renderOptions.resumePath,

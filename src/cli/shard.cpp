@@ -154,6 +154,12 @@ MergedRender mergeCheckpointFiles(const std::vector<std::string>& paths) {
     m.scene = parts.front().c.scene;
     m.estimator = parts.front().c.estimator;
     m.settings = parts.front().c.settings;
+    for (const auto& p : parts)
+        if (p.c.pendingUnits > 0)
+            m.blocksLeftOut.push_back(fmt::format(
+                "{}: block {} in progress (level {}, {} of {} photon passes) is not in the merge; resume that render to "
+                "finish it, then merge again",
+                p.path, p.c.samplesPerPixel, p.c.pendingLevel, p.c.pendingUnits, p.c.pendingUnitsTotal));
     nlohmann::json shards = nlohmann::json::array();
     for (const auto& p : parts) {
         m.seeds.insert(m.seeds.end(), p.c.seeds.begin(), p.c.seeds.end());
@@ -169,6 +175,7 @@ namespace {
 void writeMerged(const ImageOutputOptions& output, const MergedRender& m, bool quiet, size_t parts) {
     OutputInfo info{"merged", m.scene, m.estimator, "merged", m.settings, m.seeds.front(), 0.0, m.seeds, m.shards};
     writeImages(output, m.film, info);
+    for (const auto& note : m.blocksLeftOut) fmt::print(stderr, "telescope: warning: {}\n", note);  // even with -q
     if (!quiet)
         fmt::print(stderr, "wrote {} ({} spp from {} renders, seeds {})\n", output.exrPath, m.film.samplesPerPixel(),
                    parts, seedList(m.seeds));
@@ -352,6 +359,11 @@ int runShardMerge(const ShardMergeOptions& optionsIn) {
                          nlohmann::json::array({{{"file", present.front()}, {"seeds", c.seeds},
                                                  {"spp", c.film.samplesPerPixel()}}})
                              .dump()};
+        if (c.film.pending().unitsDone > 0)
+            m.blocksLeftOut.push_back(fmt::format("{}: block {} in progress ({} of {} photon passes) is not in the merge",
+                                                  present.front(), c.film.samplesPerPixel(), c.film.pending().unitsDone,
+                                                  c.film.pending().unitsTotal));
+        m.film.setPending({});
     } else {
         m = mergeCheckpointFiles(present);
     }

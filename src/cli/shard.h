@@ -55,6 +55,9 @@ struct MergedRender {
     std::string scene, estimator, settings;
     std::vector<uint32_t> seeds;  // sorted
     std::string shards;           // JSON list: file, seeds and spp of each merged checkpoint
+    // Checkpoints that held a photon block in progress: their completed blocks are merged, the
+    // block is not (Film::merge), and the merge says so.
+    std::vector<std::string> blocksLeftOut;
 };
 MergedRender mergeCheckpointFiles(const std::vector<std::string>& paths);
 

@@ -39,6 +39,7 @@ void Film::merge(const Film& other) {
     for (uint32_t c = 0; c < shader::kChannelCount; ++c)
         for (size_t i = 0; i < pixelCount(); ++i) sums_[c][i] += other.sums_[c][i];
     spp_ += other.spp_;
+    pending_ = {};
 }
 
 }  // namespace telescope

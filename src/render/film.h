@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -14,6 +15,18 @@
 #include "shared/gpu_types.h"
 
 namespace telescope {
+
+// Samples in progress between two batches: a photon block of the uniform schedule that has run
+// some of its passes, or the per-pixel blocks of the per_pixel schedule. The passes that wrote it
+// read it back on resume (Renderer::resume), so an interrupted render continues its block where it
+// stopped; nothing of it is in the film's sums. Empty for renders whose samples finish in one batch.
+struct PendingSamples {
+    uint32_t unitsDone = 0;        // units (photon passes) of the sample in progress
+    uint32_t unitsTotal = 0;       // units that sample takes (m^k passes of its level-k block)
+    uint32_t level = 0;            // its level (uniform schedule)
+    std::vector<uint8_t> device;   // the integrator's per-pixel block state, as on the device
+    bool empty() const { return unitsDone == 0 && device.empty(); }
+};
 
 class Film {
 public:
@@ -44,8 +57,13 @@ public:
     glm::dvec3 varianceOfMean(size_t pixel) const;
     uint64_t nonFiniteSamples() const;
 
-    // Adds another film's samples (same size).
+    // Adds another film's samples (same size). Samples in progress are not merged: the result has
+    // none (a merge of shards is of completed samples; `merge` says when it leaves a block out).
     void merge(const Film& other);
+
+    // The render's samples in progress (a checkpoint keeps them; images never show them).
+    const PendingSamples& pending() const { return pending_; }
+    void setPending(PendingSamples p) { pending_ = std::move(p); }
 
     // The sums as the device's accumulation holds them (shared/gpu_types.h): a (hi, lo) float
     // pair per channel and pixel, hi + lo the double sum to about 2^-48 of it.
@@ -56,6 +74,7 @@ private:
     uint64_t spp_ = 0;
     bool perPixelCounts_ = false;
     std::array<std::vector<glm::dvec4>, shader::kChannelCount> sums_;
+    PendingSamples pending_;
 };
 
 }  // namespace telescope

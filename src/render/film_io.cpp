@@ -15,7 +15,7 @@ namespace telescope {
 namespace {
 
 constexpr char kMagic[16] = "TELESCOPE-FILM\x01";  // 15 characters and the terminating zero
-constexpr uint32_t kVersion = 2;
+constexpr uint32_t kVersion = 3;
 constexpr uint32_t kFlagPerPixelCounts = 1;
 constexpr uint32_t kMaxSeeds = 1u << 20;
 
@@ -71,10 +71,16 @@ void saveCheckpoint(const std::string& path, const Checkpoint& c) {
         put(out, uint32_t(seeds.size()));
         for (uint32_t s : seeds) put(out, s);
         put(out, c.film.perPixelCounts() ? kFlagPerPixelCounts : 0u);
+        const PendingSamples& pending = c.film.pending();
+        put(out, pending.unitsDone);
+        put(out, pending.unitsTotal);
+        put(out, pending.level);
+        put(out, uint64_t(pending.device.size()));
         for (uint32_t ch = 0; ch < shader::kChannelCount; ++ch) {
             const auto& sums = c.film.sums(ch);
             out.write(reinterpret_cast<const char*>(sums.data()), std::streamsize(sums.size() * sizeof(sums[0])));
         }
+        out.write(reinterpret_cast<const char*>(pending.device.data()), std::streamsize(pending.device.size()));
     });
 }
 
@@ -85,7 +91,7 @@ CheckpointHeader readHeader(std::istream& in, Reader& r, const std::string& path
     char magic[sizeof(kMagic)];
     if (!in.read(magic, sizeof(magic)) || std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) r.fail("the header");
     const uint32_t version = r.get<uint32_t>("the version");
-    if (version != 1 && version != kVersion)
+    if (version < 1 || version > kVersion)
         throw InputError(path, "", fmt::format("unsupported checkpoint version {}", version));
     CheckpointHeader h;
     h.width = r.get<uint32_t>("the width");
@@ -111,6 +117,13 @@ CheckpointHeader readHeader(std::istream& in, Reader& r, const std::string& path
     } else {
         h.seeds = {h.seed};
     }
+    if (version >= 3) {
+        h.pendingUnits = r.get<uint32_t>("the block in progress");
+        h.pendingUnitsTotal = r.get<uint32_t>("the block in progress");
+        h.pendingLevel = r.get<uint32_t>("the block in progress");
+        h.pendingBytes = r.get<uint64_t>("the block in progress");
+        if (h.pendingBytes > (uint64_t(1) << 34) || h.pendingUnits > h.pendingUnitsTotal) r.fail("the block in progress");
+    }
     return h;
 }
 
@@ -127,7 +140,7 @@ CheckpointHeader readCheckpointHeader(const std::string& path) {
     CheckpointHeader h = readHeader(in, r, path);
     std::error_code ec;
     const uint64_t size = std::filesystem::file_size(path, ec);
-    if (ec || size != uint64_t(in.tellg()) + sumsBytes(h)) r.fail("the pixel sums");
+    if (ec || size != uint64_t(in.tellg()) + sumsBytes(h) + h.pendingBytes) r.fail("the pixel sums");
     return h;
 }
 
@@ -150,6 +163,14 @@ Checkpoint loadCheckpoint(const std::string& path) {
         if (!in.read(reinterpret_cast<char*>(sums.data()), std::streamsize(sums.size() * sizeof(sums[0]))))
             r.fail("the pixel sums");
     }
+    PendingSamples pending;
+    pending.unitsDone = h.pendingUnits;
+    pending.unitsTotal = h.pendingUnitsTotal;
+    pending.level = h.pendingLevel;
+    pending.device.resize(h.pendingBytes);
+    if (h.pendingBytes && !in.read(reinterpret_cast<char*>(pending.device.data()), std::streamsize(h.pendingBytes)))
+        r.fail("the block in progress");
+    c.film.setPending(std::move(pending));
     if (in.peek() != std::char_traits<char>::eof()) r.fail("the end of the file");
     return c;
 }

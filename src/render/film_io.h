@@ -26,7 +26,8 @@ struct Checkpoint {
 };
 
 // Written to a temporary name and renamed (core/atomic_file.h): an interrupted write leaves the
-// old file intact. Version 2 adds the settings, the seeds and the film's per-pixel-count flag.
+// old file intact. Version 2 adds the settings, the seeds and the film's per-pixel-count flag;
+// version 3 the samples in progress (Film::pending: a photon block that has run some passes).
 void saveCheckpoint(const std::string& path, const Checkpoint& checkpoint);
 // Throws InputError naming the file when it is missing, truncated or not a checkpoint.
 Checkpoint loadCheckpoint(const std::string& path);
@@ -41,6 +42,10 @@ struct CheckpointHeader {
     std::string scene, estimator, settings;
     std::vector<uint32_t> seeds;
     bool perPixelCounts = false;
+    // The samples in progress (version 3; film.h PendingSamples): units done of the block, its
+    // units and level, and the bytes of its device state.
+    uint32_t pendingUnits = 0, pendingUnitsTotal = 0, pendingLevel = 0;
+    uint64_t pendingBytes = 0;
 };
 CheckpointHeader readCheckpointHeader(const std::string& path);
 

@@ -287,6 +287,43 @@ public:
         return true;
     }
 
+    // Uniform schedule: the block's passes done, its length and level, and the per-pixel block
+    // sums; per_pixel: every pixel's block. Random numbers are keyed by (block, pass in block), so
+    // the restored block continues exactly as if it had never stopped.
+    PendingSamples pending() const override {
+        PendingSamples p;
+        if (blocks() && passInBlock_ == 0) return p;
+        if (!blocks() && !perPixel(integrator_)) return p;
+        if (blocks()) {
+            p.unitsDone = passInBlock_;
+            p.unitsTotal = block_.passes;
+            p.level = block_.level;
+        }
+        p.device.resize(blockBuffer_.size());
+        blockBuffer_.download(p.device.data(), p.device.size());
+        return p;
+    }
+
+    void restorePending(const PendingSamples& p, uint64_t nextSample) override {
+        if (p.empty()) return;
+        if (!blocks() && !perPixel(integrator_))
+            throw std::invalid_argument("a block in progress, but this photon estimator has no blocks");
+        if (p.device.size() != blockBuffer_.size())
+            throw std::invalid_argument(fmt::format("block state of {} bytes, this render keeps {}", p.device.size(),
+                                                    blockBuffer_.size()));
+        if (blocks()) {
+            const uint32_t level = uniformBlockLevel(integrator_.debias, nextSample, seed_);
+            const uint32_t passes = shader::photonBlockPasses(photonLevels(integrator_.debias), level);
+            if (p.level != level || p.unitsTotal != passes || p.unitsDone == 0 || p.unitsDone >= passes)
+                throw std::invalid_argument(fmt::format(
+                    "block {} in progress at level {} ({} of {} passes), but this render's block {} is at level {} "
+                    "({} passes)", nextSample, p.level, p.unitsDone, p.unitsTotal, nextSample, level, passes));
+            block_ = {level, passes};
+            passInBlock_ = p.unitsDone;
+        }
+        blockBuffer_.upload(p.device.data(), p.device.size());
+    }
+
     uint64_t photonPathsLastBatch() const override { return tracePush_.pathCount; }
     LoopStats loopStats() const override {
         LoopStats s;

@@ -83,6 +83,10 @@ PilotSums SamplePasses::pilotSums(uint64_t) const {
     throw std::logic_error("this integrator has no pmf pilot");
 }
 
+void SamplePasses::restorePending(const PendingSamples& p, uint64_t) {
+    if (!p.empty()) throw std::invalid_argument("this integrator keeps no samples in progress between batches");
+}
+
 uint32_t Renderer::samplesPerUnit() const { return passes_->samplesPerUnit(); }
 
 PilotSums Renderer::pilotSums() const { return passes_->pilotSums(sampleIndex_); }
@@ -128,7 +132,10 @@ void Renderer::render(const RenderRequest& request) {
     while (true) {
         double elapsed = secondsSince(start);
         // A time-limited render finishes a sample that takes several units (a block of passes).
-        if (timed ? elapsed >= request.timeLimit && !passes_->sampleInProgress() : done >= request.spp) break;
+        if (timed ? elapsed >= request.timeLimit &&
+                        (!request.finishSampleAtTimeLimit || !passes_->sampleInProgress())
+                  : done >= request.spp)
+            break;
         if (request.stop && request.stop()) break;
 
         // ---- One batch: several units, one submit ----
@@ -226,6 +233,7 @@ void Renderer::resume(const Film& film) {
     if (film.samplesPerPixel() >= (uint64_t(1) << 32))
         throw std::invalid_argument("cannot resume: the sample index would overflow 32 bits");
     // Each double sum becomes a (hi, lo) float pair, as the compensated accumulation keeps it.
+    passes_->restorePending(film.pending(), film.samplesPerPixel());
     accum_.upload(film.compensatedPairs());
     sampleIndex_ = film.samplesPerPixel();
     stats_.samplesPerPixel = sampleIndex_;
@@ -247,6 +255,7 @@ Film Renderer::film() const {
             sums[i] = glm::dvec4(raw[k]) + glm::dvec4(raw[k + 1]);
         }
     }
+    film.setPending(passes_->pending());
     return film;
 }
 

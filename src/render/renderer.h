@@ -40,9 +40,16 @@ struct RenderProgress {
 struct RenderRequest {
     uint64_t spp = 0;          // samples per pixel to add (used when timeLimit is 0)
     double timeLimit = 0.0;    // seconds; renders whole dispatches until it is reached
+    // At the time limit, a sample that takes several units (a photon block) is finished (true: the
+    // render overruns by up to a block, and the block count is a stopping time, so their sum is
+    // unbiased by Wald's identity) or left in progress (false: the render stops at the deadline;
+    // the block stays in film().pending() for a checkpoint; an image of the completed blocks
+    // alone leans towards short, low-level blocks: docs/PHOTON-MAPPING.md "Time limits").
+    bool finishSampleAtTimeLimit = true;
     std::function<void(const RenderProgress&)> progress;  // called after every batch
     // Asked before every batch: true ends the render there (a signal). A photon block in
-    // progress is abandoned; every completed sample stays in the film.
+    // progress stays in film().pending(), so a checkpoint of it resumes the block where it stopped;
+    // every completed sample is in the film.
     std::function<bool()> stop;
 };
 

@@ -15,6 +15,7 @@
 #include "gpu/buffer.h"
 #include "gpu/context.h"
 #include "gpu/pipeline.h"
+#include "render/film.h"
 #include "render/render_plan.h"
 #include "scene/scene.h"
 #include "shared/camera.h"
@@ -127,6 +128,12 @@ public:
     virtual void setPilotLevel(uint32_t level);
     // The pmf pilot's sums so far (samples: the render's per-pixel count); same as setPilotLevel.
     virtual PilotSums pilotSums(uint64_t samples) const;
+    // The samples in progress after the last complete batch (film.h PendingSamples; empty for
+    // integrators whose samples finish within a batch), and their restoration on resume, before
+    // the first unit, where `nextSample` is the film's sample count. restorePending throws
+    // std::invalid_argument when the state is not one this render could have left.
+    virtual PendingSamples pending() const { return {}; }
+    virtual void restorePending(const PendingSamples& p, uint64_t nextSample);
     // Points the camera passes at another camera of the same resolution (a push constant: no new
     // pipelines). Returns false when the integrator cannot, so the caller builds a new Renderer.
     virtual bool setCamera(const Camera&) { return false; }
