@@ -16,7 +16,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "render/film_io.h"
 #include "render/image_output.h"
+#include "render/sample_passes.h"
 #include "render_harness.h"
 
 namespace fs = std::filesystem;
@@ -151,4 +153,61 @@ TEST_F(PhotonCli, NegativePixelsSurviveToTheExr) {
     EXPECT_EQ(j["photon_paths"].get<uint64_t>(), 20000u * j["photon_passes"].get<uint64_t>());
     EXPECT_GT(j["photons_stored"].get<uint64_t>(), 10000u);
     EXPECT_EQ(j["validation_messages"].get<uint64_t>(), 0u);
+}
+
+TEST_F(PhotonCli, TimeLimitsFinishTheBlockOrKeepItInTheCheckpoint) {
+    // plan prints the overrun and deadline table for uniform blocks, and with --time the budget in
+    // passes it measured; a scene without blocks is refused (exit 2 naming the key).
+    std::string text, err;
+    ASSERT_EQ(run("plan " + scene(), &text, &err), 0) << err;
+    EXPECT_NE(text.find("time limits (uniform blocks"), std::string::npos) << text;
+    ASSERT_EQ(run("plan " + scene() + " --set camera.resolution=[16,16] --time 3", &text, &err), 0) << err;
+    EXPECT_NE(text.find("--time 3: "), std::string::npos) << text;
+    EXPECT_NE(text.find("level weights rho_k of the completed blocks: k0 "), std::string::npos) << text;
+    EXPECT_EQ(run("plan " + scene() + " --set integrator.debias=null --time 3", nullptr, &err), 2);
+    EXPECT_NE(err.find("integrator.debias"), std::string::npos) << err;
+
+    // A seed whose first block is long (level 4: 81 passes, each over 1 ms).
+    const DebiasSettings d = test::loadTestScene("scenes/point-plane-photon.json").integrator.debias;
+    uint32_t seed = 1;
+    while (photonBlockLevel(d, 0, seed) != 4) ++seed;
+    const std::string common = " --set camera.resolution=[16,16] --set integrator.photon_count=20000 -q --no-png --seed " +
+                               std::to_string(seed);
+    // deadline: stops inside block 0; the checkpoint keeps it, and resumed it completes as an
+    // uninterrupted render of one block does.
+    ASSERT_EQ(run("render " + scene() + common + " --time 0.02 --time-policy deadline -o " + path("d.exr") +
+                      " --checkpoint " + path("d.ckpt"),
+                  nullptr, &err),
+              0)
+        << err;
+    const Checkpoint stopped = loadCheckpoint(path("d.ckpt"));
+    EXPECT_EQ(stopped.film.samplesPerPixel(), 0u);
+    EXPECT_GT(stopped.film.pending().unitsDone, 0u);
+    EXPECT_EQ(stopped.film.pending().unitsTotal, 81u);
+    ASSERT_EQ(run("render " + scene() + common + " --resume " + path("d.ckpt") + " --spp 1 -o " + path("r.exr") +
+                      " --checkpoint " + path("r.ckpt"),
+                  nullptr, &err),
+              0)
+        << err;
+    ASSERT_EQ(run("render " + scene() + common + " --spp 1 -o " + path("w.exr") + " --checkpoint " + path("w.ckpt"),
+                  nullptr, &err),
+              0)
+        << err;
+    const Film resumed = loadCheckpoint(path("r.ckpt")).film, whole = loadCheckpoint(path("w.ckpt")).film;
+    ASSERT_EQ(resumed.samplesPerPixel(), 1u);
+    double worst = 0.0;
+    for (size_t i = 0; i < whole.pixelCount(); ++i) {
+        const glm::dvec4 a = resumed.sums(shader::kChannelEstimate)[i], b = whole.sums(shader::kChannelEstimate)[i];
+        worst = std::max(worst, glm::length(a - b) / (glm::length(b) + 1e-3));
+    }
+    EXPECT_LT(worst, 1e-4) << "the resumed block differs from the uninterrupted one";
+    // finish-block (the default): the same limit finishes block 0, all 81 passes.
+    ASSERT_EQ(run("render " + scene() + common + " --time 0.02 -o " + path("f.exr") + " --stats-json " + path("f.json"),
+                  nullptr, &err),
+              0)
+        << err;
+    std::ifstream statsFile(path("f.json"));
+    const nlohmann::json stats = nlohmann::json::parse(statsFile);
+    EXPECT_GE(stats["spp"].get<uint64_t>(), 1u);
+    EXPECT_GE(stats["photon_passes"].get<uint64_t>(), 81u);
 }

@@ -23,6 +23,7 @@
 #include "render/film_io.h"
 #include "render/image_output.h"
 #include "render/renderer.h"
+#include "scene/photon_budget.h"
 #include "scene/scene_loader.h"
 #include "scene/settings_json.h"
 #include "study/converge.h"
@@ -637,7 +638,76 @@ int runStudyTransmittance(const CommonOptions& common, const StudyTransmittanceC
     return 0;
 }
 
-int runPlan(const CommonOptions& common, const DerivativeCli& derivative) {
+namespace {
+
+// Unbiased photon mapping with the uniform schedule: blocks whose lengths a time budget meets.
+bool uniformPhotonBlocks(const IntegratorSettings& in) {
+    return usesPhotons(in) && in.debias.estimator != DebiasEstimator::None && in.debias.schedule == LevelSchedule::Uniform;
+}
+
+std::string budgetRow(const PhotonBudget& b) {
+    return fmt::format("  {:>9.0f} {:>9.1f} {:>9.0f} {:>7.0f} {:>7.0f} {:>8.0f} {:>9.4f} {:>9.3f}\n", b.budgetPasses,
+                       b.expectedBlocks, b.overrunMedian, b.overrun90, b.overrun99, b.overrun999,
+                       b.overrunAbove(b.budgetPasses), b.deadlineBias);
+}
+
+// What time budgets do to the blocks (scene/photon_budget.h): a table over budgets in passes, and
+// with passSeconds > 0 the budget of timeLimit seconds with its level weights at the deadline.
+std::string photonBudgetText(const DebiasSettings& d, double timeLimit, double passSeconds) {
+    const PhotonBlockDesign design{double(d.pmf.r), double(d.photon.areaRatio), d.photon.photonGrowth, d.photon.levelCap};
+    std::string s = fmt::format(
+        "time limits (uniform blocks, docs/PHOTON-MAPPING.md \"Time limits\"): with --time the render finishes the block "
+        "running at the limit (--time-policy finish-block: every level keeps its weight, the render overruns) or stops "
+        "there (deadline: no overrun, but blocks longer than what is left never finish, and the image of the completed "
+        "blocks keeps part of the base bias). Exact renewal sums over the block lengths m^k, p(k):\n"
+        "  {:>9} {:>9} {:>9} {:>7} {:>7} {:>8} {:>9} {:>9}\n",
+        "budget", "blocks", "overrun", "90%", "99%", "99.9%", "P(>= 2x)", "deadline");
+    for (uint64_t passes : {10u, 100u, 1000u, 10000u, 100000u}) s += budgetRow(photonBudget(design, passes));
+    s += "  (budget and overrun in photon passes; blocks: expected blocks started; overrun: median and quantiles of the "
+         "passes past the budget with finish-block; P(>= 2x): the render takes more than twice its budget; deadline: "
+         "the base bias the deadline policy's image keeps, for a smooth photon density, against the truncation's " +
+         fmt::format("{:.2g})\n", std::pow(double(d.photon.areaRatio), double(d.photon.levelCap)));
+    if (passSeconds > 0.0) {
+        const uint64_t passes = std::max<uint64_t>(1, uint64_t(timeLimit / passSeconds));
+        const PhotonBudget b = photonBudget(design, passes);
+        s += fmt::format("  --time {:g}: {:.3g} s per photon pass (measured here, a few passes) gives a budget of {} passes{}\n",
+                         timeLimit, passSeconds, passes,
+                         passes > kPhotonBudgetExactPasses ? " (renewal rate beyond 2^22 passes)" : "");
+        s += budgetRow(b);
+        s += fmt::format("  finish-block: median overrun {:.3g} s, 99% {:.3g} s, 99.9% {:.3g} s; deadline: level weights "
+                         "rho_k of the completed blocks:",
+                         b.overrunMedian * passSeconds, b.overrun99 * passSeconds, b.overrun999 * passSeconds);
+        for (const PhotonBudgetLevel& l : b.levels) {
+            if (l.probability < 1e-6 && l.deadlineWeight == 0.0) break;
+            s += fmt::format(" k{} {:.3g}", l.level, l.deadlineWeight);
+        }
+        s += "\n";
+    }
+    return s;
+}
+
+// Seconds per photon pass of this scene on this device: eight passes after two (the first ones
+// size the photon map and may run again), setup not counted.
+double measurePhotonPassSeconds(gpu::Context& context, const Scene& scene) {
+    Renderer renderer(context, scene, kDefaultSeed);
+    auto passes = [&](uint32_t batches) {
+        RenderRequest request;
+        request.spp = 1u << 20;
+        uint32_t asked = 0;
+        request.stop = [&] { return ++asked > batches; };
+        renderer.render(request);
+    };
+    passes(2);
+    const double seconds = renderer.stats().wallSeconds;
+    const uint64_t done = renderer.stats().photonPasses;
+    passes(8);
+    const uint64_t measured = renderer.stats().photonPasses - done;
+    return measured ? (renderer.stats().wallSeconds - seconds) / double(measured) : 0.0;
+}
+
+}  // namespace
+
+int runPlan(const CommonOptions& common, const DerivativeCli& derivative, double timeLimit) {
     Scene scene = loadWithOverrides(common);
     if (!derivative.key.empty()) {
         // The versions' checks need the device (the renderer's buffers): plan builds one.
@@ -651,6 +721,18 @@ int runPlan(const CommonOptions& common, const DerivativeCli& derivative) {
     }
     GpuScene gpuScene = buildGpuScene(scene);
     fmt::print("{}", describePlan(scene, makeRenderPlan(scene, gpuScene.features)));
+    if (timeLimit > 0.0 && !uniformPhotonBlocks(scene.integrator))
+        throw InputError(scene.path, "integrator.debias",
+                         "plan --time describes unbiased photon mapping's blocks (level_schedule \"uniform\"); this "
+                         "scene has none, so every --time render stops within a batch of its limit");
+    if (uniformPhotonBlocks(scene.integrator)) {
+        double passSeconds = 0.0;
+        if (timeLimit > 0.0) {
+            gpu::Context context(contextOptions(common));
+            passSeconds = measurePhotonPassSeconds(context, scene);
+        }
+        fmt::print("{}", photonBudgetText(scene.integrator.debias, timeLimit, passSeconds));
+    }
     if (*autoPmfKey(scene.integrator)) {
         // pmf "auto": plan runs the pilots a render would run (they need the device) and prints
         // what they measured, the pmf they chose and its predicted work x variance.

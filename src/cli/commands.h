@@ -92,7 +92,9 @@ int runStudyTransmittance(const CommonOptions& common, const StudyTransmittanceC
 int runReference(const CommonOptions& common, const ReferenceOptions& options);
 int runMerge(const MergeOptions& options);
 int runConverge(const CommonOptions& common, const ConvergeOptionsCli& options);
-int runPlan(const CommonOptions& common, const DerivativeCli& derivative = {});
+// timeLimit > 0: for unbiased photon mapping's uniform blocks, times photon passes and prints
+// what a budget of that many seconds does (scene/photon_budget.h).
+int runPlan(const CommonOptions& common, const DerivativeCli& derivative = {}, double timeLimit = 0.0);
 int runDevices();
 
 }  // namespace telescope::cli

@@ -201,6 +201,11 @@ int main(int argc, char** argv) {
     addCommon(plan);
     DerivativeCli planDerivative;
     addDerivative(plan, planDerivative);
+    double planTime = 0.0;
+    plan->add_option("--time", planTime,
+                     "Unbiased photon mapping: what a --time budget of this many seconds does to the blocks (times "
+                     "a few photon passes on the device first)")
+        ->check(CLI::PositiveNumber);
     app.add_subcommand("devices", "List Vulkan devices");
 
     try {
@@ -223,7 +228,7 @@ int main(int argc, char** argv) {
         if (shardRender->parsed()) return runShardRender(common, shardRenderOptions);
         if (shardMerge->parsed()) return runShardMerge(shardMergeOptions);
         if (converge->parsed()) return runConverge(common, convergeOptions);
-        if (plan->parsed()) return runPlan(common, planDerivative);
+        if (plan->parsed()) return runPlan(common, planDerivative, planTime);
         if (view->parsed()) return viewer::runView(common, viewOptions);
         if (studyTr->parsed()) return runStudyTransmittance(common, studyOptions);
         return runDevices();
