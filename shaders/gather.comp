@@ -49,11 +49,84 @@ vec3 directLight(vec3 p, vec3 ng, vec3 n, vec3 albedo, inout Rng rng) {
 
 // The per-pixel block buffer (kGatherBlockVec4s vec4 per pixel): compensated sums of the block's
 // base and correction (hi, lo pairs; w of the first: level + 1 for per_pixel, 0 = no block; w of
-// the second: passes done), then the kernel sums of the slices before the last.
+// the second: passes done), the kernel sums of the slices before the last, and the gather vertex
+// the first slice found.
 const uint kBlockBaseHi = 0u, kBlockBaseLo = 1u, kBlockCorrHi = 2u, kBlockCorrLo = 3u;
 const uint kSliceBase = 4u, kSliceDifference = 5u;
+const uint kBlockVertex = 6u;  // 4 vec4: the gather vertex of a pass in slices (storeGatherVertex)
 // k-nearest gathers: the k nearest photons follow (photon_gather.glsl, nearestStore).
 const uint kBlockStride = kGatherBlockVec4s + (kGatherCount + 1u) / 2u;
+
+// The camera chain's gather vertex: where it reached a diffuse surface (vertex v > 0; 0 when the
+// chain ended without one), the normal facing the chain, f = throughput x albedo / pi, and the
+// light it saw: emission along the chain and, with next-event estimation, one light sample there.
+struct GatherVertex {
+    vec3 p;
+    vec3 n;
+    vec3 f;
+    vec3 light;
+    uint vertex;
+};
+
+GatherVertex traceCameraChain(vec3 origin, vec3 dir, inout Rng rng) {
+    GatherVertex gv;
+    gv.p = vec3(0.0);
+    gv.n = vec3(0.0);
+    gv.f = vec3(0.0);
+    gv.light = vec3(0.0);
+    gv.vertex = 0u;
+    vec3 throughput = vec3(1.0);
+    // The camera chain's vertex v: emission seen there has v - 1 scattering vertices, a gather or
+    // light sample at v joins paths of at least v (photon_trace.comp: at most max_bounces - 1).
+    for (uint v = 1u; v <= kPhotonMaxBounces; ++v) {
+        Hit hit;
+        if (!traceClosest(origin, dir, kInfinity, hit)) break;
+        Prim pr = scenePrim(hit.prim);
+        vec3 p, ng;
+        hitPoint(pr, origin, dir, hit.t, p, ng);
+        gv.light += throughput * primEmission(pr, dir, ng);
+        if (v + 1u > kPhotonMaxBounces) break;
+        MaterialGpu m = sceneMaterial(pr.material);
+        vec3 ns = shadingNormal(hit.prim, hit.bary, ng);  // ng unless the triangle is smooth-shaded
+        bool front = dot(dir, ns) < 0.0;
+        vec3 n = front ? ns : -ns;  // faces the camera path
+
+        if (m.type == kBsdfLambert) {
+            if (!front && !kTwoSided) break;
+            if (kNextEvent && kLightCount > 0u) gv.light += throughput * directLight(p, ng, n, m.albedo, rng);
+            gv.p = p;
+            gv.n = n;
+            gv.f = throughput * m.albedo * kInvPi;
+            gv.vertex = v;
+            break;
+        }
+        if (!kHasSpecular || !isSpecularBsdf(m.type)) break;  // null
+        throughput *= scatterSpecular(m, front, n, dir, rng);
+        // Radiance, not flux, flows along the camera chain: refraction scales it (shared/bsdf.h).
+        if (kRadianceScaling && m.type == kBsdfDielectric && dot(dir, n) < 0.0)
+            throughput *= refractionRadianceScale(m, front);
+        origin = offsetRayOrigin(p, ng, dir);
+    }
+    return gv;
+}
+
+void storeGatherVertex(AccumRef block, uint at, GatherVertex gv) {
+    block.v[at] = vec4(gv.p, uintBitsToFloat(gv.vertex));
+    block.v[at + 1u] = vec4(gv.n, 0.0);
+    block.v[at + 2u] = vec4(gv.f, 0.0);
+    block.v[at + 3u] = vec4(gv.light, 0.0);
+}
+
+GatherVertex loadGatherVertex(AccumRef block, uint at) {
+    GatherVertex gv;
+    vec4 a = block.v[at];
+    gv.p = a.xyz;
+    gv.vertex = floatBitsToUint(a.w);
+    gv.n = block.v[at + 1u].xyz;
+    gv.f = block.v[at + 2u].xyz;
+    gv.light = block.v[at + 3u].xyz;
+    return gv;
+}
 
 uint passSeed(uint seed, uint passInBlock) { return passInBlock == 0u ? seed : seed ^ pcgHash(passInBlock); }
 
@@ -88,59 +161,42 @@ void gatherPixel() {
         level = state == 0.0 ? photonLevelSample(levels, uLevel1, uLevel2) : uint(state) - 1u;
     }
 
-    // ---- Specular chain to the first diffuse vertex ----
-    vec3 throughput = vec3(1.0);
-    vec3 light = vec3(0.0);  // emission along the chain and the light sample
+    // ---- Specular chain to the first diffuse vertex (the gather vertex) ----
+    // A pass in slices traces it once: the first slice leaves the vertex in the block buffer and
+    // the later slices read it there (the chain through a 100k-triangle water surface, traced
+    // again in each of ~100 slices, was most of the water caustic's gather).
+    GatherVertex gv;
+    if (pc.slice == 0u) {
+        gv = traceCameraChain(origin, dir, rng);
+        if (pc.sliceCount > 1u) storeGatherVertex(block, bi + kBlockVertex, gv);
+    } else {
+        gv = loadGatherVertex(block, bi + kBlockVertex);
+    }
+    vec3 light = gv.light;  // emission along the chain and the light sample
     vec3 kernelBase = vec3(0.0), kernelDifference = vec3(0.0);  // times the BSDF, this slice
-    // The camera chain's vertex v: emission seen there has v - 1 scattering vertices, a gather or
-    // light sample at v joins paths of at least v (photon_trace.comp: at most max_bounces - 1).
-    for (uint v = 1u; v <= kPhotonMaxBounces; ++v) {
-        Hit hit;
-        if (!traceClosest(origin, dir, kInfinity, hit)) break;
-        Prim pr = scenePrim(hit.prim);
-        vec3 p, ng;
-        hitPoint(pr, origin, dir, hit.t, p, ng);
-        light += throughput * primEmission(pr, dir, ng);
-        if (v + 1u > kPhotonMaxBounces) break;
-        MaterialGpu m = sceneMaterial(pr.material);
-        vec3 ns = shadingNormal(hit.prim, hit.bary, ng);  // ng unless the triangle is smooth-shaded
-        bool front = dot(dir, ns) < 0.0;
-        vec3 n = front ? ns : -ns;  // faces the camera path
-
-        if (m.type == kBsdfLambert) {
-            if (!front && !kTwoSided) break;
-            vec3 f = throughput * m.albedo * kInvPi;
-            if (lastSlice && kNextEvent && kLightCount > 0u) light += throughput * directLight(p, ng, n, m.albedo, rng);
-            float rb2 = pc.radius * pc.radius;
-            float logRadius2 = unbiased ? photonLevelLogRadius2(levels, level) : 0.0;
-            GatherSums sums;
-            if (kGatherCount > 0u) {
-                // k nearest: the slices carry the nearest photons so far in the block buffer
-                NearestStateRef state = NearestStateRef(uvec2(pc.blockLo, pc.blockHi));
-                NearestPhotons nearest;
-                if (pc.slice == 0u) nearestClear(nearest, kGatherCount);
-                else nearestLoad(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
-                nearestSearch(map, p, rb2, kGatherCount, pc.slice * gatherSlicePhotons(kGatherCount), nearest);
-                if (lastSlice) {
-                    sums = nearestSums(map, nearest, n, rb2, kGatherCount, kKernel, kPhotonMaxBounces - v);
-                } else {
-                    nearestStore(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
-                    sums = GatherSums(vec3(0.0), vec3(0.0), 0u);
-                }
+    if (gv.vertex > 0u) {
+        float rb2 = pc.radius * pc.radius;
+        float logRadius2 = unbiased ? photonLevelLogRadius2(levels, level) : 0.0;
+        GatherSums sums;
+        if (kGatherCount > 0u) {
+            // k nearest: the slices carry the nearest photons so far in the block buffer
+            NearestStateRef state = NearestStateRef(uvec2(pc.blockLo, pc.blockHi));
+            NearestPhotons nearest;
+            if (pc.slice == 0u) nearestClear(nearest, kGatherCount);
+            else nearestLoad(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
+            nearestSearch(map, gv.p, rb2, kGatherCount, pc.slice * gatherSlicePhotons(kGatherCount), nearest);
+            if (lastSlice) {
+                sums = nearestSums(map, nearest, gv.n, rb2, kGatherCount, kKernel, kPhotonMaxBounces - gv.vertex);
             } else {
-                sums = gatherPhotons(map, p, n, rb2, unbiased, logRadius2, pc.logAreaRatio, kKernel,
-                                     pc.slice * kGatherSlicePhotons, kPhotonMaxBounces - v);
+                nearestStore(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
+                sums = GatherSums(vec3(0.0), vec3(0.0), 0u);
             }
-            kernelBase = f * sums.base;
-            kernelDifference = f * sums.difference;
-            break;
+        } else {
+            sums = gatherPhotons(map, gv.p, gv.n, rb2, unbiased, logRadius2, pc.logAreaRatio, kKernel,
+                                 pc.slice * kGatherSlicePhotons, kPhotonMaxBounces - gv.vertex);
         }
-        if (!kHasSpecular || !isSpecularBsdf(m.type)) break;  // null
-        throughput *= scatterSpecular(m, front, n, dir, rng);
-        // Radiance, not flux, flows along the camera chain: refraction scales it (shared/bsdf.h).
-        if (kRadianceScaling && m.type == kBsdfDielectric && dot(dir, n) < 0.0)
-            throughput *= refractionRadianceScale(m, front);
-        origin = offsetRayOrigin(p, ng, dir);
+        kernelBase = gv.f * sums.base;
+        kernelDifference = gv.f * sums.difference;
     }
 
     // ---- Slices: the kernel sums of the earlier slices wait in the block buffer ----

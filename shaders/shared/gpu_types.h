@@ -323,7 +323,7 @@ CONST uint kGatherGroupSize = 8u;   // 8x8 pixel tiles
 // kGatherSlicePhotons photons of each of its 8 buckets per dispatch: a pass whose fullest bucket
 // holds more runs the gather in several slices (dispatches), each adding its part of the sums.
 CONST uint kGatherSlicePhotons = 4096u;
-CONST uint kGatherBlockVec4s = 6u;  // per-pixel block buffer of the gather (gather.comp)
+CONST uint kGatherBlockVec4s = 10u;  // per-pixel block buffer of the gather (gather.comp)
 // k-nearest gathers keep the k nearest photons (squared distance, sorted index) of a pixel across
 // slices: after the block vec4s, kMaxGatherCount / 2 vec4 more per pixel.
 CONST uint kMaxGatherCount = 64u;

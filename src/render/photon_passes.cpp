@@ -276,9 +276,16 @@ public:
         lastStored_ = stored;
         const uint32_t slicesNeeded = PhotonMap::slicesFor(fullest, integrator_.photon.gatherCount);
         if (stored > map_.capacity() || slicesNeeded > slices_) {
-            // The gather skipped its accumulation: grow what was short and repeat the pass.
+            // The gather skipped its accumulation: grow what was short and repeat the pass. A map
+            // that overflowed built its grid from the photons it kept only, so its fullest bucket
+            // is scaled by the photons stored over those kept (else the repeat finds too few
+            // slices and traces the pass a third time: the water caustic's first pass did).
+            const uint64_t kept = std::min<uint64_t>(stored, map_.capacity());
+            const uint64_t expected = kept ? uint64_t(double(fullest) * double(stored) / double(kept)) : fullest;
             if (stored > map_.capacity()) map_.reserve(stored + stored / 4);
-            if (slicesNeeded > slices_) slices_ = PhotonMap::slicesFor(fullest + fullest / 4, integrator_.photon.gatherCount);
+            const uint32_t full = uint32_t(std::min<uint64_t>(expected + expected / 4, UINT32_MAX));
+            if (PhotonMap::slicesFor(full, integrator_.photon.gatherCount) > slices_)
+                slices_ = PhotonMap::slicesFor(full, integrator_.photon.gatherCount);
             return false;
         }
         map_.shrinkTo(stored + stored / 4);  // the next pass stores about as many
