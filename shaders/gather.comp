@@ -130,6 +130,64 @@ GatherVertex loadGatherVertex(AccumRef block, uint at) {
 
 uint passSeed(uint seed, uint passInBlock) { return passInBlock == 0u ? seed : seed ^ pcgHash(passInBlock); }
 
+// The kernel sums of this slice at the gather vertex, times its f (base at r_b, difference
+// K_{r_{k+1}} - K_{r_k}). k-nearest gathers carry the nearest photons so far across the slices in
+// the block buffer and sum them in the last slice.
+void sliceKernelSums(PhotonMapRef map, uint bi, GatherVertex gv, bool unbiased, PhotonLevels levels, uint level,
+                     out vec3 kernelBase, out vec3 kernelDifference) {
+    kernelBase = vec3(0.0);
+    kernelDifference = vec3(0.0);
+    if (gv.vertex == 0u) return;
+    float rb2 = pc.radius * pc.radius;
+    GatherSums sums;
+    if (kGatherCount > 0u) {
+        NearestStateRef state = NearestStateRef(uvec2(pc.blockLo, pc.blockHi));
+        NearestPhotons nearest;
+        if (pc.slice == 0u) nearestClear(nearest, kGatherCount);
+        else nearestLoad(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
+        nearestSearch(map, gv.p, rb2, kGatherCount, pc.slice * gatherSlicePhotons(kGatherCount), nearest);
+        if (pc.slice + 1u < pc.sliceCount) {
+            nearestStore(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
+            return;
+        }
+        sums = nearestSums(map, nearest, gv.n, rb2, kGatherCount, kKernel, kPhotonMaxBounces - gv.vertex);
+    } else {
+        float logRadius2 = unbiased ? photonLevelLogRadius2(levels, level) : 0.0;
+        sums = gatherPhotons(map, gv.p, gv.n, rb2, unbiased, logRadius2, pc.logAreaRatio, kKernel,
+                             pc.slice * kGatherSlicePhotons, kPhotonMaxBounces - gv.vertex);
+    }
+    kernelBase = gv.f * sums.base;
+    kernelDifference = gv.f * sums.difference;
+}
+
+// Unbiased photon mapping: adds this pass's base and correction to the pixel's block. Returns
+// false while the block has passes to go; true with the block's sample (the mean of its passes)
+// in base and correction when this pass completes it.
+bool completeBlock(AccumRef block, uint bi, PhotonLevels levels, uint level, uint done, inout vec3 base,
+                   out vec3 correction, vec3 kernelDifference) {
+    vec3 passCorrection = kernelDifference / photonLevelProbability(levels, level);
+    if (done == 0u) {
+        block.v[bi + kBlockBaseHi] = vec4(0.0);
+        block.v[bi + kBlockBaseLo] = vec4(0.0);
+        block.v[bi + kBlockCorrHi] = vec4(0.0);
+        block.v[bi + kBlockCorrLo] = vec4(0.0);
+    }
+    addCompensated(block, bi + kBlockBaseHi, vec4(base, 0.0));  // w (block state) unchanged
+    addCompensated(block, bi + kBlockCorrHi, vec4(passCorrection, 0.0));
+    uint passes = photonBlockPasses(levels, level);
+    correction = vec3(0.0);
+    if (done + 1u < passes) {
+        block.v[bi + kBlockBaseHi].w = float(level + 1u);
+        block.v[bi + kBlockBaseLo].w = float(done + 1u);
+        return false;
+    }
+    float inv = 1.0 / float(passes);
+    base = (block.v[bi + kBlockBaseHi].xyz + block.v[bi + kBlockBaseLo].xyz) * inv;
+    correction = (block.v[bi + kBlockCorrHi].xyz + block.v[bi + kBlockCorrLo].xyz) * inv;
+    block.v[bi + kBlockBaseHi].w = 0.0;
+    return true;
+}
+
 void gatherPixel() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
     if (pixel.x >= pc.width || pixel.y >= pc.height) return;
@@ -139,7 +197,6 @@ void gatherPixel() {
     uint pixelIndex = pixel.y * pc.width + pixel.x;
     AccumRef block = AccumRef(uvec2(pc.blockLo, pc.blockHi));
     uint bi = pixelIndex * kBlockStride;
-    bool lastSlice = pc.slice + 1u == pc.sliceCount;
 
     // ---- Camera ray and the level of this pass ----
     Rng rng = rngCreate(pixelIndex, pc.pass, passSeed(pc.seed, pc.passInBlock));
@@ -148,8 +205,6 @@ void gatherPixel() {
     vec2 film = cameraFilmPoint(kFilter, pixel, vec2(u1, u2), filterWeight);
     vec3 dir = cameraRayDirection(film, pc.width, pc.height, pc.planeDistance, pc.cameraRight, pc.cameraUp,
                                   pc.cameraForward);
-    vec3 origin = pc.cameraPosition;
-
     const bool unbiased = kEstimator == kPhotonUnbiased;
     PhotonLevels levels = PhotonLevels(pc.pmfR, pc.logAreaRatio, pc.photonGrowth, pc.levelCap);
     float uLevel1 = rngNext(rng), uLevel2 = rngNext(rng);
@@ -161,43 +216,16 @@ void gatherPixel() {
         level = state == 0.0 ? photonLevelSample(levels, uLevel1, uLevel2) : uint(state) - 1u;
     }
 
-    // ---- Specular chain to the first diffuse vertex (the gather vertex) ----
-    // A pass in slices traces it once: the first slice leaves the vertex in the block buffer and
-    // the later slices read it there (the chain through a 100k-triangle water surface, traced
-    // again in each of ~100 slices, was most of the water caustic's gather).
+    // ---- The gather vertex: a pass in slices traces the chain in its first slice only ----
     GatherVertex gv;
     if (pc.slice == 0u) {
-        gv = traceCameraChain(origin, dir, rng);
+        gv = traceCameraChain(pc.cameraPosition, dir, rng);
         if (pc.sliceCount > 1u) storeGatherVertex(block, bi + kBlockVertex, gv);
     } else {
         gv = loadGatherVertex(block, bi + kBlockVertex);
     }
-    vec3 light = gv.light;  // emission along the chain and the light sample
-    vec3 kernelBase = vec3(0.0), kernelDifference = vec3(0.0);  // times the BSDF, this slice
-    if (gv.vertex > 0u) {
-        float rb2 = pc.radius * pc.radius;
-        float logRadius2 = unbiased ? photonLevelLogRadius2(levels, level) : 0.0;
-        GatherSums sums;
-        if (kGatherCount > 0u) {
-            // k nearest: the slices carry the nearest photons so far in the block buffer
-            NearestStateRef state = NearestStateRef(uvec2(pc.blockLo, pc.blockHi));
-            NearestPhotons nearest;
-            if (pc.slice == 0u) nearestClear(nearest, kGatherCount);
-            else nearestLoad(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
-            nearestSearch(map, gv.p, rb2, kGatherCount, pc.slice * gatherSlicePhotons(kGatherCount), nearest);
-            if (lastSlice) {
-                sums = nearestSums(map, nearest, gv.n, rb2, kGatherCount, kKernel, kPhotonMaxBounces - gv.vertex);
-            } else {
-                nearestStore(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
-                sums = GatherSums(vec3(0.0), vec3(0.0), 0u);
-            }
-        } else {
-            sums = gatherPhotons(map, gv.p, gv.n, rb2, unbiased, logRadius2, pc.logAreaRatio, kKernel,
-                                 pc.slice * kGatherSlicePhotons, kPhotonMaxBounces - gv.vertex);
-        }
-        kernelBase = gv.f * sums.base;
-        kernelDifference = gv.f * sums.difference;
-    }
+    vec3 kernelBase, kernelDifference;
+    sliceKernelSums(map, bi, gv, unbiased, levels, level, kernelBase, kernelDifference);
 
     // ---- Slices: the kernel sums of the earlier slices wait in the block buffer ----
     if (pc.sliceCount > 1u) {
@@ -205,44 +233,19 @@ void gatherPixel() {
             kernelBase += block.v[bi + kSliceBase].xyz;
             kernelDifference += block.v[bi + kSliceDifference].xyz;
         }
-        if (!lastSlice) {
+        if (pc.slice + 1u < pc.sliceCount) {
             block.v[bi + kSliceBase] = vec4(kernelBase, 0.0);
             block.v[bi + kSliceDifference] = vec4(kernelDifference, 0.0);
             return;
         }
     }
 
-    // ---- The pass's sample, or its part of the block ----
-    vec3 base = light + kernelBase, correction = vec3(0.0);
-    float count = 0.0;  // per_pixel: samples added to this pixel (film channel kChannelEstimateSq.w)
-    if (unbiased) {
-        vec3 passCorrection = kernelDifference / photonLevelProbability(levels, level);
-        if (done == 0u) {
-            block.v[bi + kBlockBaseHi] = vec4(0.0);
-            block.v[bi + kBlockBaseLo] = vec4(0.0);
-            block.v[bi + kBlockCorrHi] = vec4(0.0);
-            block.v[bi + kBlockCorrLo] = vec4(0.0);
-        }
-        addCompensated(block, bi + kBlockBaseHi, vec4(base, 0.0));  // w (block state) unchanged
-        addCompensated(block, bi + kBlockCorrHi, vec4(passCorrection, 0.0));
-        uint passes = photonBlockPasses(levels, level);
-        if (done + 1u < passes) {
-            block.v[bi + kBlockBaseHi].w = float(level + 1u);
-            block.v[bi + kBlockBaseLo].w = float(done + 1u);
-            return;
-        }
-        // The block is complete: its sample is the mean of its passes.
-        float inv = 1.0 / float(passes);
-        base = (block.v[bi + kBlockBaseHi].xyz + block.v[bi + kBlockBaseLo].xyz) * inv;
-        correction = (block.v[bi + kBlockCorrHi].xyz + block.v[bi + kBlockCorrLo].xyz) * inv;
-        block.v[bi + kBlockBaseHi].w = 0.0;
-        if (kSchedule == kLevelSchedulePerPixel) count = 1.0;
-    }
-
-    // ---- Accumulate: estimate, square, base, correction and its signed parts ----
+    // ---- The pass's sample (or its block's, when this pass completes it); accumulate ----
+    vec3 base = gv.light + kernelBase, correction = vec3(0.0);
+    if (unbiased && !completeBlock(block, bi, levels, level, done, base, correction, kernelDifference)) return;
     SampleSums sums = sampleSumsZero();
     sampleSumsAdd(sums, base, correction);
-    sums.count = count;
+    sums.count = unbiased && kSchedule == kLevelSchedulePerPixel ? 1.0 : 0.0;  // film kChannelEstimateSq.w
     accumulateSums(AccumRef(uvec2(pc.accumLo, pc.accumHi)), pixelIndex, pc.width * pc.height, sums);
 }
 
