@@ -46,6 +46,7 @@ layout(std430, binding = kBindingPrimMedia) readonly buffer PrimMediaBuffer { ui
 
 // ---- Density ----
 #include "shared/density_grid.h"
+#include "shared/majorant_walk.h"
 
 // World point / direction -> the grid's unit box [0, 1]^3 (an affine map, MediumGpu::gridRow*).
 vec3 gridUnitPoint(uint mi, vec3 p) {
@@ -187,19 +188,11 @@ vec3 trTrackGrid(uint mode, TrSegment s, inout Rng rng, inout uint lookups) {
     uint mi = s.medium;
     float sMax = trMaxComponent(s.sigmaT);
     vec3 scale = sceneMedium(mi).majorantScale;
-    ivec3 res = ivec3(sceneMedium(mi).majorantRes);
-    vec3 xo = gridUnitPoint(mi, s.origin) * scale;
-    vec3 xd = gridUnitDir(mi, s.dir) * scale;
-    ivec3 cell = clamp(ivec3(floor(xo)), ivec3(0), res - 1);
-    ivec3 stepDir = ivec3(sign(xd));
-    vec3 inv = safeInverse(xd);
-    vec3 tDelta = abs(inv);
-    // Parameter of the next face crossing along each axis
-    vec3 tNext = (vec3(cell) + vec3(greaterThan(xd, vec3(0.0))) - xo) * inv;
-    tNext = mix(tNext, vec3(kInfinity), equal(xd, vec3(0.0)));
+    MajorantWalk walk = majorantWalkStart(gridUnitPoint(mi, s.origin) * scale, gridUnitDir(mi, s.dir) * scale,
+                                          ivec3(sceneMedium(mi).majorantRes), s.len);
     float t = 0.0;
-    float tCell = min(min(tNext.x, tNext.y), min(tNext.z, s.len));
-    vec2 mm = majorantCell(mi, cell);
+    float tCell = majorantWalkCellEnd(walk);
+    vec2 mm = majorantCell(mi, walk.cell);
     float control = mode == kTrEstResidualRatioTracking ? 0.5 * (mm.x + mm.y) : 0.0;
     float mu = sMax * (mode == kTrEstResidualRatioTracking ? 0.5 * (mm.y - mm.x) : mm.y);
     if (mode == kTrEstResidualRatioTracking) result *= exp(-s.sigmaT * (control * tCell));
@@ -216,20 +209,9 @@ vec3 trTrackGrid(uint mode, TrSegment s, inout Rng rng, inout uint lookups) {
         }
         // Into the next cell (the exponential steps are memoryless, so the piece restarts there)
         t = tCell;
-        if (t >= s.len) break;
-        if (tNext.x <= tNext.y && tNext.x <= tNext.z) {
-            cell.x += stepDir.x;
-            tNext.x += tDelta.x;
-        } else if (tNext.y <= tNext.z) {
-            cell.y += stepDir.y;
-            tNext.y += tDelta.y;
-        } else {
-            cell.z += stepDir.z;
-            tNext.z += tDelta.z;
-        }
-        if (any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, res))) break;
-        tCell = min(min(tNext.x, tNext.y), min(tNext.z, s.len));
-        mm = majorantCell(mi, cell);
+        if (!majorantWalkNext(walk)) break;
+        tCell = majorantWalkCellEnd(walk);
+        mm = majorantCell(mi, walk.cell);
         if (mode == kTrEstResidualRatioTracking) {
             control = 0.5 * (mm.x + mm.y);
             mu = sMax * 0.5 * (mm.y - mm.x);
