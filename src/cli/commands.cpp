@@ -1,7 +1,7 @@
 
 #include "cli/commands.h"
 #include "cli/interrupt.h"
-#include "cli/outputs.h"
+#include "session/outputs.h"
 
 #include <unistd.h>
 
@@ -36,97 +36,7 @@ namespace fs = std::filesystem;
 
 namespace telescope::cli {
 
-namespace {
-
-Scene loadWithOverrides(const CommonOptions& o) {
-    std::vector<SceneOverride> overrides;
-    for (const auto& s : o.sets) overrides.push_back(parseOverride(s));
-    return loadScene(o.scenePath, overrides);
-}
-
-}  // namespace
-
-// ---- Derivative renders (render/derivative.h) ----
-
-DerivativeSettings derivativeSettings(const DerivativeCli& d) {
-    DerivativeSettings s;
-    s.key = d.key;
-    if (!std::isnan(d.step) && !(d.step > 0.0 && std::isfinite(d.step)))
-        throw InputError("", "--step", fmt::format("h_0 must be a positive number, not {}", d.step));
-    s.step = std::isnan(d.step) ? 0.0 : d.step;
-    s.estimator = parseDerivativeEstimator(d.estimator, "--derivative-estimator");
-    s.levels = d.levels;
-    if (!d.pmf.empty()) {
-        nlohmann::json j;
-        try {
-            j = nlohmann::json::parse(d.pmf);
-        } catch (const nlohmann::json::exception&) {
-            throw InputError("", "--derivative-pmf", fmt::format("'{}' is not JSON", d.pmf));
-        }
-        const std::string type = j.is_object() && j.contains("type") && j["type"].is_string() ? j["type"].get<std::string>() : "";
-        if (type == "auto") {
-            for (const auto& [k, v] : j.items())
-                if (k != "type" && k != "pilot_spp")
-                    throw InputError("", "--derivative-pmf", fmt::format("unknown key \"{}\" of the auto pmf", k));
-            s.autoPmf = true;
-            if (j.contains("pilot_spp")) {
-                if (!j["pilot_spp"].is_number_unsigned() || j["pilot_spp"].get<uint32_t>() < 1 || j["pilot_spp"].get<uint32_t>() > 1024)
-                    throw InputError("", "--derivative-pmf", "\"pilot_spp\" must be an integer in [1, 1024]");
-                s.pilotSpp = j["pilot_spp"].get<uint32_t>();
-            }
-            s.pmf.origin = "auto";
-            return s;
-        }
-        auto number = [&](const char* name) {
-            if (!j.contains(name) || !j[name].is_number())
-                throw InputError("", "--derivative-pmf", fmt::format("a {} pmf needs a number \"{}\"", type, name));
-            const double v = j[name].get<double>();
-            if (!(v > 0.0 && v < 1.0))
-                throw InputError("", "--derivative-pmf", fmt::format("\"{}\" must lie in (0, 1), not {}", name, v));
-            return float(v);
-        };
-        for (const auto& [k, v] : j.items())
-            if (k != "type" && k != "r" && k != "alpha")
-                throw InputError("", "--derivative-pmf", fmt::format("unknown key \"{}\"", k));
-        if (type == "geometric") {
-            s.pmf.type = PmfType::Geometric;
-            s.pmf.r = number("r");
-        } else if (type == "power_law") {
-            s.pmf.type = PmfType::PowerLaw;
-            s.pmf.alpha = number("alpha");
-        } else {
-            throw InputError("", "--derivative-pmf", "expected {\"type\": \"geometric\", \"r\": R} or "
-                                                     "{\"type\": \"power_law\", \"alpha\": A}");
-        }
-        s.pmf.origin = "given (--derivative-pmf)";
-    }
-    return s;
-}
-
-std::vector<std::pair<std::string, std::string>> derivativeMetadata(const DerivativeRenderer& r) {
-    const DerivativeParameter& p = r.parameter();
-    return {{"telescope:derivative_key", p.key},
-            {"telescope:derivative_value", fmt::format("{:.17g}", p.value)},
-            {"telescope:derivative_step", fmt::format("{:.17g}", p.step)},
-            {"telescope:derivative_estimator", derivativeEstimatorName(r.settings().estimator)}};
-}
-
-// ---- Shared with the viewer (cli/outputs.h) ----
-
-void reportIgnoredKeys(const Scene& scene, bool quiet) {
-    if (quiet) return;
-    for (const auto& key : scene.ignoredKeys) {
-        const std::string why = ignoredKeyReason(key);
-        fmt::print(stderr, "{}: ignoring '{}' ({})\n", scene.path, key, why.empty() ? "not used by Telescope" : why);
-    }
-}
-
-gpu::ContextOptions contextOptions(const CommonOptions& o) {
-    gpu::ContextOptions c;
-    c.deviceIndex = o.device;
-    c.validation = o.validation;
-    return c;
-}
+using namespace session;  // the session layer: loading, outputs, checks
 
 // ---- Progress: a bar on a terminal, a plain line every ~10% otherwise ----
 class ProgressReporter {
@@ -163,31 +73,6 @@ private:
     double nextReport_ = 0.1;
 };
 
-// ---- Output paths are checked before any work is done ----
-void checkOutputPath(const std::string& path, const char* option, const char* extension) {
-    fs::path p(path);
-    if (extension && p.extension() != extension)
-        throw InputError("", option, fmt::format("'{}' must end in {}", path, extension));
-    fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
-    if (!fs::is_directory(dir))
-        throw InputError("", option, fmt::format("directory '{}' does not exist", dir.string()));
-}
-
-void checkImageOutputs(ImageOutputOptions& o) {
-    checkOutputPath(o.exrPath, "-o", ".exr");
-    if (!o.noPng) {
-        if (o.pngPath.empty()) o.pngPath = fs::path(o.exrPath).replace_extension(".png").string();
-        checkOutputPath(o.pngPath, "--png", ".png");
-    }
-    if (!o.checkpointPath.empty()) checkOutputPath(o.checkpointPath, "--checkpoint", nullptr);
-}
-
-void checkValidation(const gpu::Context& context) {
-    if (context.validationMessageCount() > 0)
-        throw std::runtime_error(
-            fmt::format("{} Vulkan validation message(s) were reported", context.validationMessageCount()));
-}
-
 // One line when lavapipe's loop cap may have ended loops, or the loop budget dropped samples
 // (shared/gpu_types.h "Lavapipe's loop cap"): those pixels are wrong. Printed even with --quiet.
 void warnLoopStats(const RenderStats& stats) {
@@ -198,37 +83,6 @@ void warnLoopStats(const RenderStats& stats) {
     if (l.overlong > 0)
         fmt::print(stderr, "telescope: warning: {} samples dropped: one step of their path ran more loop iterations "
                    "than a dispatch allows (TELESCOPE_LOOP_BUDGET)\n", l.overlong);
-}
-
-void writeImages(const ImageOutputOptions& o, const Film& film, const OutputInfo& info) {
-    ImageMetadata meta;
-    meta.entries = {
-        {"telescope:version", TELESCOPE_VERSION},
-        {"telescope:scene_file", info.sceneFile},
-        {"telescope:scene", info.sceneDocument},
-        {"telescope:estimator", info.estimator},
-        {"telescope:settings", info.settings},
-        {"telescope:seed", std::to_string(info.seed)},
-        {"telescope:spp", std::to_string(film.samplesPerPixel())},
-        {"telescope:render_seconds", fmt::format("{:.6f}", info.seconds)},
-        {"telescope:device", info.device},
-        {"telescope:non_finite_samples", std::to_string(film.nonFiniteSamples())},
-    };
-    for (const auto& e : info.extra) meta.entries.push_back(e);
-    if (!info.shards.empty()) {
-        std::string seeds;
-        for (uint32_t seed : info.seeds) seeds += (seeds.empty() ? "" : ",") + std::to_string(seed);
-        meta.entries.push_back({"telescope:seeds", seeds});
-        meta.entries.push_back({"telescope:shards", info.shards});
-    }
-    writeExr(o.exrPath, film, meta);
-    if (!o.noPng) writePngPreview(o.pngPath, film);
-    if (!o.checkpointPath.empty()) saveCheckpoint(o.checkpointPath, checkpointOf(film, info));
-}
-
-Checkpoint checkpointOf(const Film& film, const OutputInfo& info) {
-    return Checkpoint{film, info.seed, info.sceneDocument, info.estimator, info.settings,
-                      info.seeds.empty() ? std::vector<uint32_t>{info.seed} : info.seeds};
 }
 
 namespace {

@@ -13,6 +13,8 @@
 
 namespace telescope::cli {
 
+using namespace session;  // the session layer: loading, outputs, checks
+
 namespace {
 
 volatile sig_atomic_t gSignal = 0;

@@ -9,10 +9,13 @@
 #include <string>
 #include <vector>
 
-#include "cli/outputs.h"
+#include "session/outputs.h"
 #include "render/film_io.h"
 
 namespace telescope::cli {
+
+using session::ImageOutputOptions;
+using session::OutputInfo;
 
 class InterruptGuard {
 public:

@@ -11,7 +11,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "cli/outputs.h"
+#include "session/outputs.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "render/film_io.h"
@@ -21,6 +21,8 @@
 namespace fs = std::filesystem;
 
 namespace telescope::cli {
+
+using namespace session;  // the session layer: loading, outputs, checks
 
 namespace {
 
@@ -201,9 +203,7 @@ int runShardPlan(const CommonOptions& common, const ShardPlanOptions& o) {
     if (uint64_t(o.seed) + o.shards - 1 > UINT32_MAX)
         throw InputError("", "--seed", fmt::format("seeds {} + 0..{} do not fit in 32 bits", o.seed, o.shards - 1));
     if (o.outDir.empty()) throw InputError("", "-o", "an output directory is required");
-    std::vector<SceneOverride> overrides;
-    for (const auto& s : common.sets) overrides.push_back(parseOverride(s));
-    Scene scene = loadScene(common.scenePath, overrides);
+    Scene scene = loadWithOverrides(common);
     if (const char* key = autoPmfKey(scene.integrator); *key)
         throw InputError(scene.path, key,
                          "pmf \"auto\" would let every shard pick its own pmf, and shards of other settings do not "
@@ -273,9 +273,7 @@ int runShardRender(const CommonOptions& commonIn, const ShardRenderOptions& o) {
     common.scenePath = plan.sceneFile;
     common.sets = plan.sets;
     {
-        std::vector<SceneOverride> overrides;
-        for (const auto& s : common.sets) overrides.push_back(parseOverride(s));
-        Scene scene = loadScene(common.scenePath, overrides);
+        Scene scene = loadWithOverrides(common);
         if (scene.document.dump() != plan.scene)
             throw InputError(plan.sceneFile, firstDifference(plan.scene, scene.document.dump()),
                              fmt::format("the scene changed since {} was made", planPath(o.dir)));

@@ -15,7 +15,7 @@
 #include <GLFW/glfw3.h>
 #include <fmt/format.h>
 
-#include "cli/outputs.h"
+#include "session/outputs.h"
 #include "core/error.h"
 #include "gpu/context.h"
 #include "render/derivative.h"
@@ -125,7 +125,7 @@ public:
         camera_ = home_;
         channel_ = uint32_t(channelFromName(options.channel));
         script_ = parseInputScript(options.keys);
-        if (derivativeMode()) derivativeSettings_ = cli::derivativeSettings(options.derivative);
+        if (derivativeMode()) derivativeSettings_ = session::derivativeSettings(options.derivative);
         restart(false);
         if (!quiet_) {
             fmt::print("{}", describePlan(*scene_, derivative_ ? derivative_->renderer().plan() : renderer_->plan()));
@@ -395,18 +395,18 @@ private:
     // The EXR (and PNG, checkpoint) that `render` writes, with the samples shown.
     void save() {
         const Film film = this->film();
-        cli::OutputInfo info{scene_->path,         scene_->document.dump(),
+        session::OutputInfo info{scene_->path,         scene_->document.dump(),
                              derivative_ ? derivative_->description() : renderer_->plan().estimator,
                              context_.info().name, resolvedSettings(*scene_).dump(),
                              options_.seed,        renderSeconds_};
         if (derivative_) {
-            info.extra = cli::derivativeMetadata(*derivative_);
-            cli::ImageOutputOptions exr = options_.output;
+            info.extra = session::derivativeMetadata(*derivative_);
+            session::ImageOutputOptions exr = options_.output;
             exr.noPng = true;  // signed false colour instead
-            cli::writeImages(exr, film, info);
+            session::writeImages(exr, film, info);
             if (!options_.output.noPng) writeSignedPngPreview(options_.output.pngPath, film);
         } else {
-            cli::writeImages(options_.output, film, info);
+            session::writeImages(options_.output, film, info);
         }
         if (!quiet_) fmt::print(stderr, "view: saved {} ({} spp)\n", options_.output.exrPath, film.samplesPerPixel());
     }
@@ -536,32 +536,30 @@ std::unique_ptr<gpu::Context> presentingContext(Window& window, gpu::ContextOpti
 
 }  // namespace
 
-int runView(const cli::CommonOptions& common, const ViewOptions& optionsIn) {
+int runView(const session::CommonOptions& common, const ViewOptions& optionsIn) {
     installStopHandlers();
     ViewOptions o = optionsIn;
 
     // ---- Input first: bad input exits 2 before any window opens ----
-    std::vector<SceneOverride> overrides;
-    for (const auto& s : common.sets) overrides.push_back(parseOverride(s));
-    Scene scene = loadScene(common.scenePath, overrides);
+    Scene scene = session::loadWithOverrides(common);
     if (channelFromName(o.channel) < 0)
         throw InputError("", "--channel",
                          fmt::format("unknown channel '{}' (estimate, base, correction, correction_positive, "
                                      "correction_negative, standard_error)",
                                      o.channel));
-    if (!o.derivative.key.empty()) (void)cli::derivativeSettings(o.derivative);  // options checked before the window
+    if (!o.derivative.key.empty()) (void)session::derivativeSettings(o.derivative);  // options checked before the window
     if (o.output.exrPath.empty()) o.output.exrPath = fs::path(common.scenePath).stem().string() + "-view.exr";
-    cli::checkImageOutputs(o.output);
-    if (!o.screenshot.empty()) cli::checkOutputPath(o.screenshot, "--screenshot", ".png");
+    session::checkImageOutputs(o.output);
+    if (!o.screenshot.empty()) session::checkOutputPath(o.screenshot, "--screenshot", ".png");
     for (const auto& s : parseInputScript(o.keys))
         if (s.token == "shot" && o.screenshot.empty())
             throw InputError("", "--keys", "'shot' writes next to the --screenshot file: give --screenshot");
-    cli::reportIgnoredKeys(scene, common.quiet);
+    session::reportIgnoredKeys(scene, common.quiet);
 
     // ---- Window, then a device that presents to it ----
     const uint32_t legend = shader::kViewLegendHeight;
     Window window("telescope view", int(scene.camera.width), int(scene.camera.height + legend));
-    gpu::ContextOptions contextOptions = cli::contextOptions(common);
+    gpu::ContextOptions contextOptions = session::contextOptions(common);
     contextOptions.instanceExtensions = Window::requiredInstanceExtensions();
     contextOptions.deviceExtensions = {VK_KHR_SWAPCHAIN_EXTENSION_NAME};
     VkSurfaceKHR surface = VK_NULL_HANDLE;
@@ -573,7 +571,7 @@ int runView(const cli::CommonOptions& common, const ViewOptions& optionsIn) {
         Viewer viewer(*context, window, presenter, std::move(scene), o, common.quiet);
         viewer.run();
     }
-    cli::checkValidation(*context);
+    session::checkValidation(*context);
     return 0;
 }
 

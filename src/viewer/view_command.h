@@ -7,19 +7,19 @@
 #include <string>
 #include <vector>
 
-#include "cli/commands.h"
+#include "session/options.h"
 
 namespace telescope::viewer {
 
 struct ViewOptions {
-    cli::ImageOutputOptions output;  // where the save key writes (default: SCENE-view.exr)
-    uint32_t seed = cli::kDefaultSeed;
+    session::ImageOutputOptions output;  // where the save key writes (default: SCENE-view.exr)
+    uint32_t seed = session::kDefaultSeed;
     uint64_t spp = 0;          // stop adding samples at this count; 0: never stop
     uint64_t frames = 0;       // scripting: exit after this many frames; 0: until the window closes
     std::string screenshot;    // scripting: PNG of the window as presented last
     std::string keys;          // scripting: input events, "KEY@FRAME,..." (see parseInputScript)
     std::string channel = "estimate";  // the channel shown first
-    cli::DerivativeCli derivative;     // --derivative KEY: show the derivative image (docs/DERIVATIVES.md)
+    session::DerivativeOptions derivative;     // --derivative KEY: show the derivative image (docs/DERIVATIVES.md)
 };
 
 // A scripted input event: at the start of frame `frame` (1-based), before it renders.
@@ -39,6 +39,6 @@ int channelFromName(const std::string& name);
 const char* channelName(uint32_t channel);
 
 // Returns the exit code: 0 after the window closed, the frames ran out or SIGINT/SIGTERM arrived.
-int runView(const cli::CommonOptions& common, const ViewOptions& options);
+int runView(const session::CommonOptions& common, const ViewOptions& options);
 
 }  // namespace telescope::viewer

@@ -1,23 +1,26 @@
-// Pieces of the render command that the viewer shares: the Vulkan context options, output path
-// checks, and the EXR (with its metadata), PNG and checkpoint a render writes.
+// The session layer between the front ends (src/cli, src/viewer) and the renderer: the scene
+// loaded with its --set overrides, the Vulkan context options, output path checks, and the EXR
+// (with its metadata), PNG and checkpoint a render writes. Nothing here parses a command line.
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
-#include "cli/commands.h"
 #include "gpu/context.h"
 #include "render/film.h"
 #include "render/derivative.h"
 #include "render/film_io.h"
 #include "scene/scene.h"
+#include "session/options.h"
 
-namespace telescope::cli {
+namespace telescope::session {
 
+// The scene file with the --set overrides applied (throws InputError naming the file and key).
+Scene loadWithOverrides(const CommonOptions& o);
 void reportIgnoredKeys(const Scene& scene, bool quiet);
 // --derivative and its options as settings; throws InputError naming the option.
-DerivativeSettings derivativeSettings(const DerivativeCli& d);
+DerivativeSettings derivativeSettings(const DerivativeOptions& d);
 // A derivative render's EXR metadata beyond OutputInfo's (the parameter, its value, h_0).
 std::vector<std::pair<std::string, std::string>> derivativeMetadata(const DerivativeRenderer& r);
 gpu::ContextOptions contextOptions(const CommonOptions& o);
@@ -46,4 +49,4 @@ Checkpoint checkpointOf(const Film& film, const OutputInfo& info);
 // device, timings), the PNG preview and the checkpoint, as `telescope render` writes them.
 void writeImages(const ImageOutputOptions& o, const Film& film, const OutputInfo& info);
 
-}  // namespace telescope::cli
+}  // namespace telescope::session
