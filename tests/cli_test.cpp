@@ -20,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "render/film_io.h"
 #include "render/image_output.h"
 #include "render_harness.h"
 
@@ -257,6 +258,22 @@ TEST_F(Cli, ResumeRejectsAnotherScene) {
     expectBadInput("render " + scene() + kSmall + " --set integrator.max_bounces=3 --spp 2 -o " + out("b.exr") +
                        " --resume " + out("a.ckpt"),
                    {"a.ckpt", "another scene"});
+}
+
+TEST_F(Cli, ResumeRejectsOtherResolvedSettingsNamingTheKey) {
+    // The same scene file can resolve to other settings (a build with other defaults): resume
+    // compares the resolved settings the checkpoint recorded and names the first key that differs.
+    ASSERT_EQ(run("render " + scene() + kSmall + " --spp 2 -o " + out("a.exr") + " --checkpoint " + out("a.ckpt")).exitCode, 0);
+    Checkpoint c = loadCheckpoint(out("a.ckpt"));
+    nlohmann::json settings = nlohmann::json::parse(c.settings);
+    ASSERT_TRUE(settings["integrator"].contains("enable_light_sampling")) << c.settings;
+    settings["integrator"]["enable_light_sampling"] = !settings["integrator"]["enable_light_sampling"].get<bool>();
+    c.settings = settings.dump();
+    saveCheckpoint(out("edited.ckpt"), c);
+    expectBadInput("render " + scene() + kSmall + " --spp 2 -o " + out("b.exr") + " --resume " + out("edited.ckpt"),
+                   {"edited.ckpt", "integrator.enable_light_sampling", "other settings"});
+    // the unedited checkpoint resumes
+    EXPECT_EQ(run("render " + scene() + kSmall + " --spp 2 -o " + out("b.exr") + " --resume " + out("a.ckpt")).exitCode, 0);
 }
 
 TEST_F(Cli, CorruptCheckpointIsBadInput) {

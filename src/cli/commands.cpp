@@ -103,9 +103,17 @@ void checkSameEstimator(const Checkpoint& c, const std::string& path, const Rend
                                                c.estimator, renderer.plan().estimator));
 }
 
-// Continues the checkpoint's render, with its block in progress; a state this render could not
-// have left is bad input naming the file.
-void resumeFrom(Renderer& renderer, const Checkpoint& c, const std::string& path) {
+// Continues the checkpoint's render, with its block in progress. The checkpoint must have been
+// rendered with the settings this render resolves (defaults filled in, every pmf resolved; the
+// key that differs is named); checkpoints older than version 2 record no settings and are compared
+// by their estimator. A state this render could not have left is bad input naming the file.
+void resumeFrom(Renderer& renderer, const Checkpoint& c, const std::string& path, const Scene& scene) {
+    if (!c.settings.empty()) {
+        const std::string now = resolvedSettings(scene).dump();
+        if (c.settings != now)
+            throw InputError(path, firstDifference(c.settings, now),
+                             "checkpoint was rendered with other settings than this render resolves");
+    }
     checkSameEstimator(c, path, renderer);
     try {
         renderer.resume(c.film);
@@ -281,7 +289,7 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
         if (!common.quiet) fmt::print(stderr, "{}", pilot.summary());
     Renderer renderer(context, scene, o.seed);
     if (resume) {
-        resumeFrom(renderer, *resume, o.resumePath);
+        resumeFrom(renderer, *resume, o.resumePath, scene);
     }
     const OutputInfo info{scene.path, scene.document.dump(), renderer.plan().estimator, context.info().name,
                           resolvedSettings(scene).dump(), o.seed, 0.0};
@@ -365,7 +373,7 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
     gpu::Context context(contextOptions(common));
     Renderer renderer(context, scene, o.seed);
     if (resume) {
-        resumeFrom(renderer, *resume, o.output.checkpointPath);
+        resumeFrom(renderer, *resume, o.output.checkpointPath, scene);
     }
     const OutputInfo info{scene.path,          scene.document.dump(),           renderer.plan().estimator,
                           context.info().name, resolvedSettings(scene).dump(), o.seed,

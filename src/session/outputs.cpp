@@ -1,5 +1,6 @@
 #include "session/outputs.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -16,6 +17,19 @@
 namespace fs = std::filesystem;
 
 namespace telescope::session {
+
+// The first key where two JSON documents differ ("" when they are equal or unreadable).
+std::string firstDifference(const std::string& a, const std::string& b) {
+    nlohmann::json ja = nlohmann::json::parse(a, nullptr, false), jb = nlohmann::json::parse(b, nullptr, false);
+    if (ja.is_discarded() || jb.is_discarded()) return "";
+    nlohmann::json d = nlohmann::json::diff(ja, jb);
+    if (d.empty()) return "";
+    std::string path = d[0].value("path", "");
+    // JSON pointer "/integrator/max_bounces" -> "integrator.max_bounces"
+    if (!path.empty() && path[0] == '/') path.erase(0, 1);
+    std::replace(path.begin(), path.end(), '/', '.');
+    return path.empty() ? "(the whole document)" : path;
+}
 
 Scene loadWithOverrides(const CommonOptions& o) {
     std::vector<SceneOverride> overrides;

@@ -16,6 +16,10 @@
 
 namespace telescope::session {
 
+// The first key where two JSON documents differ, as a key path ("integrator.max_bounces"; "" when
+// they are equal or unreadable): for errors that name the key.
+std::string firstDifference(const std::string& a, const std::string& b);
+
 // The scene file with the --set overrides applied (throws InputError naming the file and key).
 Scene loadWithOverrides(const CommonOptions& o);
 void reportIgnoredKeys(const Scene& scene, bool quiet);
