@@ -1,6 +1,6 @@
 
 #include "cli/commands.h"
-#include "cli/interrupt.h"
+#include "session/interrupt.h"
 #include "session/outputs.h"
 
 #include <unistd.h>

@@ -18,7 +18,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
-#include "cli/interrupt.h"
+#include "session/interrupt.h"
 #include "cli/shard.h"
 #include "core/error.h"
 #include "study/methods.h"
@@ -236,7 +236,7 @@ int main(int argc, char** argv) {
         fmt::print(stderr, "telescope: {}\n", e.what());
         return 2;
     } catch (const std::exception& e) {
-        fmt::print(stderr, "telescope: error: {}{}\n", e.what(), keptCheckpointsNote());
+        fmt::print(stderr, "telescope: error: {}{}\n", e.what(), session::keptCheckpointsNote());
         return 1;
     }
 }

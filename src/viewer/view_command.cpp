@@ -15,6 +15,7 @@
 #include <GLFW/glfw3.h>
 #include <fmt/format.h>
 
+#include "session/interrupt.h"
 #include "session/outputs.h"
 #include "core/error.h"
 #include "gpu/context.h"
@@ -41,17 +42,6 @@ double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(
 
 constexpr double kFrameBudgetSeconds = 0.08;  // rendering per frame; display and events add a few ms
 constexpr uint32_t kMaxBatchSpp = 4096;
-
-// ---- SIGINT / SIGTERM end the loop like closing the window ----
-volatile sig_atomic_t gStopRequested = 0;
-void onStopSignal(int) { gStopRequested = 1; }
-void installStopHandlers() {
-    struct sigaction sa {};
-    sa.sa_handler = onStopSignal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, nullptr);
-    sigaction(SIGTERM, &sa, nullptr);
-}
 
 const char* kChannelNames[shader::kViewChannelCount] = {"estimate", "base", "correction", "correction_positive",
                                                         "correction_negative", "standard_error"};
@@ -135,7 +125,7 @@ public:
     }
 
     int run() {
-        while (!window_.shouldClose() && !gStopRequested && (options_.frames == 0 || frame_ < options_.frames)) {
+        while (!window_.shouldClose() && !session::InterruptGuard::requested() && (options_.frames == 0 || frame_ < options_.frames)) {
             ++frame_;
             const bool idle = paused_ || done();
             window_.poll(idle && !options_.frames ? 0.05 : 0.0);
@@ -166,7 +156,7 @@ public:
                 times = fmt::format(", rendering frames {:.1f} ms median, {:.1f} ms max", 1e3 * t[t.size() / 2], 1e3 * t.back());
             }
             fmt::print(stderr, "view: {} frames, {} spp{}{}\n", frame_, samples(), times,
-                       gStopRequested ? " (interrupted)" : "");
+                       session::InterruptGuard::requested() ? " (interrupted)" : "");
         }
         return 0;
     }
@@ -537,7 +527,7 @@ std::unique_ptr<gpu::Context> presentingContext(Window& window, gpu::ContextOpti
 }  // namespace
 
 int runView(const session::CommonOptions& common, const ViewOptions& optionsIn) {
-    installStopHandlers();
+    session::InterruptGuard interrupts;  // SIGINT / SIGTERM end the loop like closing the window
     ViewOptions o = optionsIn;
 
     // ---- Input first: bad input exits 2 before any window opens ----

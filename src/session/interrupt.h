@@ -1,4 +1,5 @@
-// SIGINT and SIGTERM during `render` and `reference`: the first signal asks the render to stop
+// SIGINT and SIGTERM during `render`, `reference` and `view` (one handler for all of them): the
+// first signal asks the render to stop
 // after the running batch (a photon pass); the command then writes the EXR and the PNG of every
 // completed sample and a checkpoint that also keeps a photon block in progress (Film::pending:
 // --resume continues it at its next pass), and exits with 128 + the signal (130, 143). A second signal ends the process at once
@@ -12,10 +13,7 @@
 #include "session/outputs.h"
 #include "render/film_io.h"
 
-namespace telescope::cli {
-
-using session::ImageOutputOptions;
-using session::OutputInfo;
+namespace telescope::session {
 
 class InterruptGuard {
 public:
@@ -63,4 +61,4 @@ int saveInterrupted(ImageOutputOptions o, const Film& film, const OutputInfo& in
 void keepCheckpointsOnFailure(std::vector<std::string> paths);
 std::string keptCheckpointsNote();
 
-}  // namespace telescope::cli
+}  // namespace telescope::session

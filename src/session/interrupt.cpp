@@ -1,4 +1,4 @@
-#include "cli/interrupt.h"
+#include "session/interrupt.h"
 
 #include <signal.h>
 #include <unistd.h>
@@ -11,9 +11,7 @@
 
 #include "core/error.h"
 
-namespace telescope::cli {
-
-using namespace session;  // the session layer: loading, outputs, checks
+namespace telescope::session {
 
 namespace {
 
@@ -23,8 +21,7 @@ struct sigaction gOldInt, gOldTerm;
 void onSignal(int sig) {
     gSignal = sig;
     static const char msg[] =
-        "\ntelescope: interrupted: saving every completed sample after the running batch (signal again to quit "
-        "at once)\n";
+        "\ntelescope: interrupted: stopping after the running batch (signal again to quit at once)\n";
     ssize_t ignored = ::write(STDERR_FILENO, msg, sizeof(msg) - 1);
     (void)ignored;
 }
@@ -117,4 +114,4 @@ std::string keptCheckpointsNote() {
     return s;
 }
 
-}  // namespace telescope::cli
+}  // namespace telescope::session
