@@ -7,11 +7,12 @@
 // into the pixel it projects to. That is the caustic with one diffuse vertex after the ball, the
 // part a path tracer finds only by hitting the light through the ball. Prints it summed over the
 // image and per block (16 x 16-pixel block means of the 256 x 144 image; MAP=1: all blocks).
+//   built by CMake (volcaustic_light_tracer; tests/volcaustic_check.py reruns it), or
 //   g++ -O2 -o light_tracer light_tracer.cpp && ./light_tracer 2000000
 #include "scene.h"
 
 int main(int argc, char** argv) {
-    long N = std::atol(argv[1]);
+    long N = argc > 1 ? std::atol(argv[1]) : 2000000;  // particles
     double IOR = getenv("IOR") ? std::atof(getenv("IOR")) : 1.5;
     buildScene(1.0);
     const int W = 256, H = 144;
