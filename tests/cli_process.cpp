@@ -100,17 +100,6 @@ bool sameSums(const Film& a, const Film& b) {
     return true;
 }
 
-double largestRelativeDifference(const Film& a, const Film& b, double floor) {
-    double worst = 0.0;
-    for (uint32_t c = 0; c < shader::kChannelCount; ++c)
-        for (size_t i = 0; i < a.pixelCount(); ++i)
-            for (int k = 0; k < 4; ++k) {
-                const double x = a.sums(c)[i][k], y = b.sums(c)[i][k];
-                worst = std::max(worst, std::abs(x - y) / (std::abs(y) + floor));
-            }
-    return worst;
-}
-
 std::map<std::string, std::string> exrStringAttributes(const std::string& path) {
     std::map<std::string, std::string> out;
     Imf::InputFile file(path.c_str());

@@ -70,8 +70,6 @@ std::vector<std::string> filesIn(const std::filesystem::path& dir);  // names, s
 
 // Every double of every channel, and the sample count, equal (bit for bit).
 bool sameSums(const Film& a, const Film& b);
-// The largest |a - b| / (|b| + floor) over every channel sum.
-double largestRelativeDifference(const Film& a, const Film& b, double floor);
 
 std::map<std::string, std::string> exrStringAttributes(const std::string& path);
 

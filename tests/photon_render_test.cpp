@@ -372,18 +372,6 @@ TEST_F(PhotonRender, PhotonsReadByAddressGiveTheSameFilm) {
 
 namespace {
 
-// The largest difference of two films' sums (every channel and component), relative to |b| + floor.
-double largestSumDifference(const Film& a, const Film& b, double floor) {
-    double worst = 0.0;
-    for (uint32_t c = 0; c < shader::kChannelCount; ++c)
-        for (size_t i = 0; i < a.pixelCount(); ++i)
-            for (int k = 0; k < 4; ++k) {
-                const double x = a.sums(c)[i][k], y = b.sums(c)[i][k];
-                worst = std::max(worst, std::abs(x - y) / (std::abs(y) + floor));
-            }
-    return worst;
-}
-
 // A render of `spp` samples stopped before its `stopAt`-th batch (a signal): its film, with the
 // samples in progress.
 Film interruptedFilm(const Scene& scene, uint32_t seed, uint64_t spp, uint32_t stopAt) {
@@ -435,7 +423,7 @@ TEST_F(PhotonRender, AnInterruptedBlockResumesWhereItStopped) {
     EXPECT_TRUE(wholeFilm.pending().empty()) << "a render that ran its blocks to the end has none in progress";
     const Film again = renderFilm(scene, blocks, seed);
     const double floor = 1e-3;
-    const double rounding = largestSumDifference(again, wholeFilm, floor);
+    const double rounding = largestRelativeDifference(again, wholeFilm, floor);
 
     const Film part = interruptedFilm(scene, seed, blocks, 4);
     ASSERT_EQ(part.samplesPerPixel(), 0u);
@@ -447,20 +435,20 @@ TEST_F(PhotonRender, AnInterruptedBlockResumesWhereItStopped) {
     const Film resumed = resumedFilm(scene, seed, part, blocks, &passes);
     const double tolerance = std::max(1e-5, 10.0 * rounding);
     std::printf("two uninterrupted renders differ by %.3g, the resumed one by %.3g (tolerance %.3g)\n", rounding,
-                largestSumDifference(resumed, wholeFilm, floor), tolerance);
-    EXPECT_LT(largestSumDifference(resumed, wholeFilm, floor), tolerance);
+                largestRelativeDifference(resumed, wholeFilm, floor), tolerance);
+    EXPECT_LT(largestRelativeDifference(resumed, wholeFilm, floor), tolerance);
     EXPECT_EQ(passes + p.unitsDone, whole.stats().photonPasses) << "passes traced twice or skipped";
 
     Film lostSums = part;
     PendingSamples zeroed = part.pending();
     std::fill(zeroed.device.begin(), zeroed.device.end(), uint8_t(0));
     lostSums.setPending(zeroed);
-    EXPECT_GT(largestSumDifference(resumedFilm(scene, seed, lostSums, blocks, nullptr), wholeFilm, floor), 100 * tolerance)
+    EXPECT_GT(largestRelativeDifference(resumedFilm(scene, seed, lostSums, blocks, nullptr), wholeFilm, floor), 100 * tolerance)
         << "the control (the block's sums lost) passed";
     Film dropped = part;
     dropped.setPending({});
     uint64_t droppedPasses = 0;
-    EXPECT_LT(largestSumDifference(resumedFilm(scene, seed, dropped, blocks, &droppedPasses), wholeFilm, floor), tolerance);
+    EXPECT_LT(largestRelativeDifference(resumedFilm(scene, seed, dropped, blocks, &droppedPasses), wholeFilm, floor), tolerance);
     EXPECT_EQ(droppedPasses, whole.stats().photonPasses) << "dropping the block retraces its passes";
 
     // A block that is not this render's (another seed draws another level for block 0) is refused.
@@ -480,14 +468,14 @@ TEST_F(PhotonRender, PerPixelBlocksResumeWhereTheyStopped) {
     const uint64_t passes = 24;
     const Film wholeFilm = renderFilm(scene, passes, seed);
     const double floor = 1e-3;
-    const double tolerance = std::max(1e-5, 10.0 * largestSumDifference(renderFilm(scene, passes, seed), wholeFilm, floor));
+    const double tolerance = std::max(1e-5, 10.0 * largestRelativeDifference(renderFilm(scene, passes, seed), wholeFilm, floor));
     const Film part = interruptedFilm(scene, seed, passes, 11);
     ASSERT_GT(part.samplesPerPixel(), 0u);
     ASSERT_LT(part.samplesPerPixel(), passes);
     ASSERT_FALSE(part.pending().device.empty());
-    EXPECT_LT(largestSumDifference(resumedFilm(scene, seed, part, passes, nullptr), wholeFilm, floor), tolerance);
+    EXPECT_LT(largestRelativeDifference(resumedFilm(scene, seed, part, passes, nullptr), wholeFilm, floor), tolerance);
     Film dropped = part;
     dropped.setPending({});
-    EXPECT_GT(largestSumDifference(resumedFilm(scene, seed, dropped, passes, nullptr), wholeFilm, floor), 100 * tolerance)
+    EXPECT_GT(largestRelativeDifference(resumedFilm(scene, seed, dropped, passes, nullptr), wholeFilm, floor), 100 * tolerance)
         << "the control (blocks dropped) passed";
 }

@@ -1,5 +1,8 @@
 #include "render_harness.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace telescope::test {
 
 gpu::Context& sharedContext() {
@@ -29,6 +32,17 @@ void expectLoopsComplete(const RenderStats& stats) {
 
 void expectNoValidationMessages() {
     EXPECT_EQ(sharedContext().validationMessageCount(), 0u) << "Vulkan validation reported problems";
+}
+
+double largestRelativeDifference(const Film& a, const Film& b, double floor) {
+    double worst = 0.0;
+    for (uint32_t c = 0; c < shader::kChannelCount; ++c)
+        for (size_t i = 0; i < a.pixelCount(); ++i)
+            for (int k = 0; k < 4; ++k) {
+                const double x = a.sums(c)[i][k], y = b.sums(c)[i][k];
+                worst = std::max(worst, std::abs(x - y) / (std::abs(y) + floor));
+            }
+    return worst;
 }
 
 }  // namespace telescope::test

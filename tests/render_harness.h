@@ -27,4 +27,7 @@ void expectLoopsComplete(const RenderStats& stats);
 // Fails the current test if the validation layer reported anything.
 void expectNoValidationMessages();
 
+// The largest |a - b| / (|b| + floor) over every component of every channel sum.
+double largestRelativeDifference(const Film& a, const Film& b, double floor);
+
 }  // namespace telescope::test
