@@ -127,10 +127,9 @@ void reportDeadlineBlock(const Film& film, const std::string& checkpointPath, bo
     const PendingSamples& b = film.pending();
     if (b.unitsDone == 0 || quiet) return;
     fmt::print(stderr,
-               "telescope: stopped at the deadline inside block {} (level {}, {} of {} photon passes): the image holds "
-               "the {} completed blocks, which lean towards short, low-level blocks ('telescope plan --time' says by "
-               "how much); {}\n",
-               film.samplesPerPixel(), b.level, b.unitsDone, b.unitsTotal, film.samplesPerPixel(),
+               "telescope: stopped at the deadline with {}: the image holds the {} completed blocks, which lean "
+               "towards short, low-level blocks ('telescope plan --time' says by how much); {}\n",
+               pendingBlockText(film.samplesPerPixel(), b.level, b.unitsDone, b.unitsTotal), film.samplesPerPixel(),
                checkpointPath.empty() ? "its passes are lost (no --checkpoint)"
                                       : "the checkpoint " + checkpointPath + " keeps the block for --resume");
 }
@@ -516,7 +515,7 @@ std::string budgetRow(const PhotonBudget& b) {
 // What time budgets do to the blocks (scene/photon_budget.h): a table over budgets in passes, and
 // with passSeconds > 0 the budget of timeLimit seconds with its level weights at the deadline.
 std::string photonBudgetText(const DebiasSettings& d, double timeLimit, double passSeconds) {
-    const PhotonBlockDesign design{double(d.pmf.r), double(d.photon.areaRatio), d.photon.photonGrowth, d.photon.levelCap};
+    const PhotonBlockDesign design = photonBlockDesign(d);
     std::string s = fmt::format(
         "time limits (uniform blocks, docs/PHOTON-MAPPING.md \"Time limits\"): with --time the render finishes the block "
         "running at the limit (--time-policy finish-block: every level keeps its weight, the render overruns) or stops "

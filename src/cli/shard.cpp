@@ -26,6 +26,11 @@ using namespace session;  // the session layer: loading, outputs, checks
 
 namespace {
 
+// The merge's note on a checkpoint whose block in progress it leaves out.
+std::string blockLeftOut(const std::string& path, const std::string& block) {
+    return path + ": " + block + " is not in the merge; resume that render to finish it, then merge again";
+}
+
 std::string seedList(const std::vector<uint32_t>& seeds) {
     std::string s;
     for (size_t i = 0; i < seeds.size(); ++i) {
@@ -145,10 +150,8 @@ MergedRender mergeCheckpointFiles(const std::vector<std::string>& paths) {
     m.settings = parts.front().c.settings;
     for (const auto& p : parts)
         if (p.c.pendingUnits > 0)
-            m.blocksLeftOut.push_back(fmt::format(
-                "{}: block {} in progress (level {}, {} of {} photon passes) is not in the merge; resume that render to "
-                "finish it, then merge again",
-                p.path, p.c.samplesPerPixel, p.c.pendingLevel, p.c.pendingUnits, p.c.pendingUnitsTotal));
+            m.blocksLeftOut.push_back(blockLeftOut(
+                p.path, pendingBlockText(p.c.samplesPerPixel, p.c.pendingLevel, p.c.pendingUnits, p.c.pendingUnitsTotal)));
     nlohmann::json shards = nlohmann::json::array();
     for (const auto& p : parts) {
         m.seeds.insert(m.seeds.end(), p.c.seeds.begin(), p.c.seeds.end());
@@ -344,10 +347,10 @@ int runShardMerge(const ShardMergeOptions& optionsIn) {
                          nlohmann::json::array({{{"file", present.front()}, {"seeds", c.seeds},
                                                  {"spp", c.film.samplesPerPixel()}}})
                              .dump()};
-        if (c.film.pending().unitsDone > 0)
-            m.blocksLeftOut.push_back(fmt::format("{}: block {} in progress ({} of {} photon passes) is not in the merge",
-                                                  present.front(), c.film.samplesPerPixel(), c.film.pending().unitsDone,
-                                                  c.film.pending().unitsTotal));
+        const PendingSamples& block = c.film.pending();
+        if (block.unitsDone > 0)
+            m.blocksLeftOut.push_back(blockLeftOut(
+                present.front(), pendingBlockText(c.film.samplesPerPixel(), block.level, block.unitsDone, block.unitsTotal)));
         m.film.setPending({});
     } else {
         m = mergeCheckpointFiles(present);

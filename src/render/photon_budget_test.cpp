@@ -65,10 +65,6 @@ Check compare(const Simulated& s, const PhotonBudget& b) {
     return c;
 }
 
-PhotonBlockDesign designOf(const DebiasSettings& d) {
-    return {double(d.pmf.r), double(d.photon.areaRatio), d.photon.photonGrowth, d.photon.levelCap};
-}
-
 }  // namespace
 
 TEST(PhotonBudget, OverrunsAndDeadlineLevelsMatchTheRenderersBlocks) {
@@ -78,12 +74,12 @@ TEST(PhotonBudget, OverrunsAndDeadlineLevelsMatchTheRenderersBlocks) {
     d.pmf.r = 0.7f;
     for (uint64_t budget : {20u, 200u}) {
         const Simulated s = simulate(d, budget, 4000);
-        const PhotonBudget b = photonBudget(designOf(d), budget);
+        const PhotonBudget b = photonBudget(photonBlockDesign(d), budget);
         // 5 overrun probabilities and 4 level shares: 5 standard errors is a false-alarm rate
         // below 1e-5 for the nine (the level counts are close to binomial; the blocks of one
         // render are nearly independent draws).
         const Check good = compare(s, b);
-        PhotonBlockDesign wrong = designOf(d);
+        PhotonBlockDesign wrong = photonBlockDesign(d);
         wrong.r = 0.6;
         const Check control = compare(s, photonBudget(wrong, budget));
         std::printf("budget %llu passes: worst z %.2f, control (r 0.6) %.2f\n", (unsigned long long)budget, good.worstZ,

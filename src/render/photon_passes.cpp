@@ -284,8 +284,7 @@ public:
             const uint64_t expected = kept ? uint64_t(double(fullest) * double(stored) / double(kept)) : fullest;
             if (stored > map_.capacity()) map_.reserve(stored + stored / 4);
             const uint32_t full = uint32_t(std::min<uint64_t>(expected + expected / 4, UINT32_MAX));
-            if (PhotonMap::slicesFor(full, integrator_.photon.gatherCount) > slices_)
-                slices_ = PhotonMap::slicesFor(full, integrator_.photon.gatherCount);
+            slices_ = std::max(slices_, PhotonMap::slicesFor(full, integrator_.photon.gatherCount));
             return false;
         }
         map_.shrinkTo(stored + stored / 4);  // the next pass stores about as many

@@ -12,13 +12,6 @@ double PhotonBudget::blockStartsBefore(double s) const {
     return prefix.back() + (s - last) * rateBeyond;
 }
 
-double PhotonBudget::startTimesBefore(double s) const {
-    if (s <= 0.0) return 0.0;
-    const double last = double(timePrefix.size() - 1);
-    if (s <= last) return timePrefix[size_t(s)];
-    return timePrefix.back() + rateBeyond * 0.5 * (s * (s - 1.0) - last * (last - 1.0));
-}
-
 double PhotonBudget::overrunAbove(double x) const {
     const double total = blockStartsBefore(budgetPasses);
     double p = 0.0;
@@ -54,21 +47,11 @@ PhotonBudget photonBudget(const PhotonBlockDesign& d, uint64_t budgetPasses) {
         u[t] = v;
     }
     b.prefix.assign(n + 1, 0.0);
-    b.timePrefix.assign(n + 1, 0.0);
-    for (uint64_t t = 0; t < n; ++t) {
-        b.prefix[t + 1] = b.prefix[t] + u[t];
-        b.timePrefix[t + 1] = b.timePrefix[t] + double(t) * u[t];
-    }
+    for (uint64_t t = 0; t < n; ++t) b.prefix[t + 1] = b.prefix[t] + u[t];
 
-    // finish-block: blocks started, the overrun's mean and quantiles
+    // finish-block: blocks started, the overrun's quantiles
     const double B = b.budgetPasses;
     b.expectedBlocks = b.blockStartsBefore(B);
-    for (const PhotonBudgetLevel& l : b.levels) {
-        // the starts t in [B - C, B) end past B, by t + C - B
-        const double lo = std::max(0.0, B - l.passes);
-        b.overrunMean += l.probability * (b.startTimesBefore(B) - b.startTimesBefore(lo) +
-                                          (l.passes - B) * (b.blockStartsBefore(B) - b.blockStartsBefore(lo)));
-    }
     auto quantile = [&](double p) {
         // smallest integer x with P(O > x) <= 1 - p
         double lo = 0.0, hi = b.levels.back().passes;

@@ -19,6 +19,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "scene/scene.h"
+
 namespace telescope {
 
 struct PhotonBlockDesign {
@@ -40,7 +42,6 @@ struct PhotonBudget {
     double expectedPasses = 0.0;        // per block
     double expectedBlocks = 0.0;        // finish-block: U(B)
     double expectedBlocksDeadline = 0.0;
-    double overrunMean = 0.0;           // passes, finish-block
     double overrunMedian = 0.0, overrun90 = 0.0, overrun99 = 0.0, overrun999 = 0.0;  // quantiles, passes
     std::vector<PhotonBudgetLevel> levels;
     double deadlineBias = 0.0;   // of the base bias, smooth density (1 - (1 - s) sum rho_k s^k)
@@ -49,13 +50,16 @@ struct PhotonBudget {
     double overrunAbove(double x) const;
     // U(s): expected block starts before pass s.
     double blockStartsBefore(double s) const;
-    // sum_{t < s} t u(t): for the overrun's mean.
-    double startTimesBefore(double s) const;
 
     // The renewal sums U(0 .. n) for n = min(B, the exact limit) + 1, and 1 / E[C] beyond.
-    std::vector<double> prefix, timePrefix;
+    std::vector<double> prefix;
     double rateBeyond = 0.0;
 };
+
+// The block design of a scene's debias settings.
+inline PhotonBlockDesign photonBlockDesign(const DebiasSettings& d) {
+    return {double(d.pmf.r), double(d.photon.areaRatio), d.photon.photonGrowth, d.photon.levelCap};
+}
 
 // Exact for budgets up to kPhotonBudgetExactPasses passes; beyond, u(t) is taken as 1 / E[C]
 // past that point (the renewal theorem), which the caller's text says.

@@ -76,8 +76,7 @@ int saveInterrupted(ImageOutputOptions o, const Film& film, const OutputInfo& in
     }
     if (o.checkpointPath.empty()) o.checkpointPath = o.exrPath + ".checkpoint";
     const std::string inProgress =
-        block.unitsDone ? fmt::format(" (with block {} in progress: level {}, {} of {} photon passes)",
-                                      film.samplesPerPixel(), block.level, block.unitsDone, block.unitsTotal)
+        block.unitsDone ? " (with " + pendingBlockText(film.samplesPerPixel(), block.level, block.unitsDone, block.unitsTotal) + ")"
                         : std::string();
     // Printed even with -q: files changed.
     if (film.samplesPerPixel() == 0) {

@@ -31,6 +31,10 @@ std::string firstDifference(const std::string& a, const std::string& b) {
     return path.empty() ? "(the whole document)" : path;
 }
 
+std::string pendingBlockText(uint64_t block, uint32_t level, uint32_t done, uint32_t total) {
+    return fmt::format("block {} in progress (level {}, {} of {} photon passes)", block, level, done, total);
+}
+
 Scene loadWithOverrides(const CommonOptions& o) {
     std::vector<SceneOverride> overrides;
     for (const auto& s : o.sets) overrides.push_back(parseOverride(s));

@@ -20,6 +20,10 @@ namespace telescope::session {
 // they are equal or unreadable): for errors that name the key.
 std::string firstDifference(const std::string& a, const std::string& b);
 
+// "block N in progress (level k, d of t photon passes)": how every message names a photon block
+// that a checkpoint keeps (Film::pending, CheckpointHeader's pending fields).
+std::string pendingBlockText(uint64_t block, uint32_t level, uint32_t done, uint32_t total);
+
 // The scene file with the --set overrides applied (throws InputError naming the file and key).
 Scene loadWithOverrides(const CommonOptions& o);
 void reportIgnoredKeys(const Scene& scene, bool quiet);
