@@ -1,5 +1,6 @@
 // gather: one thread per pixel and photon pass. The camera path follows mirror and dielectric
-// bounces to the first diffuse vertex, where the photon map gives, times the Lambert BSDF,
+// bounces (and plastic's coat, by a lobe choice) to the first vertex with a non-delta lobe, where
+// the photon map gives, each photon weighted by the BSDF (Lambert or glossy: shared/bsdf.h),
 //   biased:   the pass's sample  K_r                     (fixed radius or the PPM pass radius)
 //   unbiased: the pass's part of a block of m^k passes at level k (docs/PHOTON-MAPPING.md):
 //             Z = mean over the block of [K_{r_b} + (K_{r_{k+1}} - K_{r_k}) / p(k)]
@@ -18,6 +19,26 @@
 #include "shared/photon_density.h"
 #include "photon_scene.glsl"
 layout(binding = kBindingSortedTexels) uniform usamplerBuffer sortedTexels;
+
+// The glossy BSDF of the gather vertex being summed (gGlossy: set by sliceKernelSums), in the
+// frame (t, b, n) around the normal facing the camera chain, wi towards the chain (local): each
+// photon's factor f(wi, wo) = eval / cos wo (the photon's flux carries the cosine). Lambertian
+// vertices keep f outside the sums; scenes without glossy materials fold all of it away.
+layout(constant_id = kSpecPhotonTestCosine) const bool kTestCosine = false;  // a test's wrong variant: f |cos wo|
+struct GlossyVertex {
+    bool on;
+    MaterialGpu m;
+    vec3 t, b, n, wi;
+};
+GlossyVertex gGlossy;
+
+vec3 photonBsdf(vec3 w) {
+    if (kBsdfFamilies == 0u || !gGlossy.on) return vec3(1.0);
+    vec3 wo = vec3(dot(w, gGlossy.t), dot(w, gGlossy.b), dot(w, gGlossy.n));
+    if (!(wo.z > 0.0)) return vec3(0.0);
+    return kTestCosine ? glossyEval(gGlossy.m, gGlossy.wi, wo) : glossyEval(gGlossy.m, gGlossy.wi, wo) / wo.z;
+}
+#define PHOTON_BSDF(w) photonBsdf(w)
 #include "photon_gather.glsl"
 #include "accumulate.glsl"
 
@@ -32,18 +53,23 @@ layout(constant_id = kSpecPhotonRadianceScaling) const bool kRadianceScaling = t
 
 layout(push_constant) uniform Push { GatherPush pc; };
 
-// Next-event estimation at a Lambertian point: one light picked by power (scene_common.glsl), one
-// shadow ray. No MIS: the camera chain stops at this vertex, so no BSDF sample could find the light.
-vec3 directLight(vec3 p, vec3 ng, vec3 n, vec3 albedo, inout Rng rng) {
+// Next-event estimation at the gather vertex: one light picked by power (scene_common.glsl), one
+// shadow ray, f = the Lambert albedo / pi (glossy false) or the glossy BSDF in the frame (t, b, n)
+// for wi (local). No MIS: the camera chain stops at this vertex, so no BSDF sample could find the
+// light.
+vec3 directLight(vec3 p, vec3 ng, vec3 n, vec3 albedo, bool glossy, MaterialGpu m, vec3 t, vec3 b, vec3 wi,
+                 inout Rng rng) {
     LightSample ls;
     if (!sampleLight(p, rng, ls)) return vec3(0.0);
     float cosS = dot(n, ls.wi);
     if (cosS <= 0.0) return vec3(0.0);
     vec3 value = ls.weight * cosS;
+    if (kBsdfFamilies != 0u && glossy) value = ls.weight * glossyEval(m, wi, vec3(dot(ls.wi, t), dot(ls.wi, b), cosS));
     if (!any(greaterThan(value, vec3(0.0)))) return vec3(0.0);
     vec3 o = offsetRayOrigin(p, ng, ls.wi);
     float tMax = ls.dist < kInfinity ? max(ls.dist - length(o - p), 0.0) : kInfinity;
     if (traceAny(o, ls.wi, tMax)) return vec3(0.0);
+    if (kBsdfFamilies != 0u && glossy) return value;
     return albedo * kInvPi * value;
 }
 
@@ -53,19 +79,28 @@ vec3 directLight(vec3 p, vec3 ng, vec3 n, vec3 albedo, inout Rng rng) {
 // the first slice found.
 const uint kBlockBaseHi = 0u, kBlockBaseLo = 1u, kBlockCorrHi = 2u, kBlockCorrLo = 3u;
 const uint kSliceBase = 4u, kSliceDifference = 5u;
-const uint kBlockVertex = 6u;  // 4 vec4: the gather vertex of a pass in slices (storeGatherVertex)
+const uint kBlockVertex = 6u;  // 6 vec4: the gather vertex of a pass in slices (storeGatherVertex)
 // k-nearest gathers: the k nearest photons follow (photon_gather.glsl, nearestStore).
 const uint kBlockStride = kGatherBlockVec4s + (kGatherCount + 1u) / 2u;
 
-// The camera chain's gather vertex: where it reached a diffuse surface (vertex v > 0; 0 when the
-// chain ended without one), the normal facing the chain, f = throughput x albedo / pi, and the
-// light it saw: emission along the chain and, with next-event estimation, one light sample there.
+// The camera chain's gather vertex: where it reached a surface with a non-delta lobe (vertex v > 0;
+// 0 when the chain ended without one), the normal facing the chain, the light it saw (emission
+// along the chain and, with next-event estimation, one light sample there) and its BSDF: at a
+// Lambertian vertex (material kNoGlossy) f = throughput x albedo / pi; at a glossy one f = the
+// throughput (over 1 - p of a Dirac lobe not taken), the material (index, and the values its
+// textures gave) and wi, the direction towards the chain.
+const uint kNoGlossy = 0xffffffffu;
 struct GatherVertex {
     vec3 p;
     vec3 n;
     vec3 f;
     vec3 light;
     uint vertex;
+    uint material;
+    vec3 wi;
+    vec3 albedo;
+    float roughness;
+    float substrateWeight;
 };
 
 GatherVertex traceCameraChain(vec3 origin, vec3 dir, inout Rng rng) {
@@ -75,6 +110,11 @@ GatherVertex traceCameraChain(vec3 origin, vec3 dir, inout Rng rng) {
     gv.f = vec3(0.0);
     gv.light = vec3(0.0);
     gv.vertex = 0u;
+    gv.material = kNoGlossy;
+    gv.wi = vec3(0.0);
+    gv.albedo = vec3(0.0);
+    gv.roughness = 0.0;
+    gv.substrateWeight = 0.0;
     vec3 throughput = vec3(1.0);
     // The camera chain's vertex v: emission seen there has v - 1 scattering vertices, a gather or
     // light sample at v joins paths of at least v (photon_trace.comp: at most max_bounces - 1).
@@ -87,17 +127,49 @@ GatherVertex traceCameraChain(vec3 origin, vec3 dir, inout Rng rng) {
         gv.light += throughput * primEmission(pr, dir, ng);
         if (v + 1u > kPhotonMaxBounces) break;
         MaterialGpu m = sceneMaterial(pr.material);
+        if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
+        uint index = pr.material;
+        // mixed: one component (transparency is path tracing's: the loader refuses it here)
+        if (kBsdfFamilies != 0u) resolveComposite(m, index, throughput, pr, hit.prim, hit.bary, p, rng);
         vec3 ns = shadingNormal(hit.prim, hit.bary, ng);  // ng unless the triangle is smooth-shaded
         bool front = dot(dir, ns) < 0.0;
         vec3 n = front ? ns : -ns;  // faces the camera path
 
         if (m.type == kBsdfLambert) {
             if (!front && !kTwoSided) break;
-            if (kNextEvent && kLightCount > 0u) gv.light += throughput * directLight(p, ng, n, m.albedo, rng);
+            if (kNextEvent && kLightCount > 0u)
+                gv.light += throughput * directLight(p, ng, n, m.albedo, false, m, n, n, n, rng);
             gv.p = p;
             gv.n = n;
             gv.f = throughput * m.albedo * kInvPi;
             gv.vertex = v;
+            break;
+        }
+        if (kBsdfFamilies != 0u && isGlossyBsdf(m.type)) {
+            if (!front && !kTwoSided) break;
+            vec3 t, b;
+            buildFrame(n, t, b);
+            vec3 wi = vec3(dot(-dir, t), dot(-dir, b), dot(-dir, n));
+            // A Dirac lobe (plastic's coat) is followed with the probability the BSDF's sampling
+            // gives it; the gather then stands for the other lobes (shared/bsdf.h).
+            float pDirac = glossyDiracProbability(m, wi);
+            if (pDirac > 0.0 && rngNext(rng) < pDirac) {
+                throughput *= glossyDiracReflectance(m, wi) / pDirac;
+                dir = reflect(dir, n);
+                origin = offsetRayOrigin(p, ng, dir);
+                continue;
+            }
+            throughput /= 1.0 - pDirac;
+            if (kNextEvent && kLightCount > 0u) gv.light += throughput * directLight(p, ng, n, m.albedo, true, m, t, b, wi, rng);
+            gv.p = p;
+            gv.n = n;
+            gv.f = throughput;
+            gv.vertex = v;
+            gv.material = index;
+            gv.wi = -dir;
+            gv.albedo = m.albedo;
+            gv.roughness = m.roughness;
+            gv.substrateWeight = m.substrateWeight;
             break;
         }
         if (!kHasSpecular || !isSpecularBsdf(m.type)) break;  // null
@@ -112,20 +184,49 @@ GatherVertex traceCameraChain(vec3 origin, vec3 dir, inout Rng rng) {
 
 void storeGatherVertex(AccumRef block, uint at, GatherVertex gv) {
     block.v[at] = vec4(gv.p, uintBitsToFloat(gv.vertex));
-    block.v[at + 1u] = vec4(gv.n, 0.0);
-    block.v[at + 2u] = vec4(gv.f, 0.0);
+    block.v[at + 1u] = vec4(gv.n, uintBitsToFloat(gv.material));
+    block.v[at + 2u] = vec4(gv.f, gv.substrateWeight);
     block.v[at + 3u] = vec4(gv.light, 0.0);
+    if (kBsdfFamilies != 0u) {
+        block.v[at + 4u] = vec4(gv.albedo, gv.roughness);
+        block.v[at + 5u] = vec4(gv.wi, 0.0);
+    }
 }
 
 GatherVertex loadGatherVertex(AccumRef block, uint at) {
     GatherVertex gv;
-    vec4 a = block.v[at];
+    vec4 a = block.v[at], n = block.v[at + 1u], f = block.v[at + 2u];
     gv.p = a.xyz;
     gv.vertex = floatBitsToUint(a.w);
-    gv.n = block.v[at + 1u].xyz;
-    gv.f = block.v[at + 2u].xyz;
+    gv.n = n.xyz;
+    gv.material = floatBitsToUint(n.w);
+    gv.f = f.xyz;
+    gv.substrateWeight = f.w;
     gv.light = block.v[at + 3u].xyz;
+    gv.albedo = vec3(0.0);
+    gv.roughness = 0.0;
+    gv.wi = vec3(0.0);
+    if (kBsdfFamilies != 0u) {
+        vec4 g = block.v[at + 4u];
+        gv.albedo = g.xyz;
+        gv.roughness = g.w;
+        gv.wi = block.v[at + 5u].xyz;
+    }
     return gv;
+}
+
+// The glossy BSDF of a gather vertex for photonBsdf (off at a Lambertian one).
+void setGlossyVertex(GatherVertex gv) {
+    gGlossy.on = false;
+    if (kBsdfFamilies == 0u || gv.material == kNoGlossy) return;
+    gGlossy.on = true;
+    gGlossy.m = sceneMaterial(gv.material);
+    gGlossy.m.albedo = gv.albedo;
+    gGlossy.m.roughness = gv.roughness;
+    gGlossy.m.substrateWeight = gv.substrateWeight;
+    gGlossy.n = gv.n;
+    buildFrame(gv.n, gGlossy.t, gGlossy.b);
+    gGlossy.wi = vec3(dot(gv.wi, gGlossy.t), dot(gv.wi, gGlossy.b), dot(gv.wi, gGlossy.n));
 }
 
 uint passSeed(uint seed, uint passInBlock) { return passInBlock == 0u ? seed : seed ^ pcgHash(passInBlock); }
@@ -138,6 +239,7 @@ void sliceKernelSums(PhotonMapRef map, uint bi, GatherVertex gv, bool unbiased, 
     kernelBase = vec3(0.0);
     kernelDifference = vec3(0.0);
     if (gv.vertex == 0u) return;
+    setGlossyVertex(gv);
     float rb2 = pc.radius * pc.radius;
     GatherSums sums;
     if (kGatherCount > 0u) {

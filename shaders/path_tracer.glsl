@@ -29,20 +29,6 @@ void addContribution(inout PathResult r, uint bounce, vec3 c, LevelPmf pmf, uint
 }
 
 #include "scene_common.glsl"
-#include "shared/texture.h"
-
-// The material at a hit with its textured parameters looked up at the hit's uv (only materials
-// with a texture pay for the uv; kHasTextures folds all of it out of scenes without textures).
-void applyTextures(inout MaterialGpu m, Prim pr, uint slot, vec2 bary, vec3 p) {
-    if (m.albedoTexture == kNoTexture && m.roughnessTexture == kNoTexture) return;
-    vec2 uv = primUv(slot, pr.type, bary, p, pr.p0);
-    if (m.albedoTexture != kNoTexture) {
-        m.albedo = textureValue(m.albedoTexture, uv);
-        // Plastics: the substrate's share of the sampling follows the albedo (layered.h).
-        m.substrateWeight = (m.albedo.x + m.albedo.y + m.albedo.z) / 3.0 * exp(-2.0 * (m.k.x + m.k.y + m.k.z) / 3.0);
-    }
-    if (m.roughnessTexture != kNoTexture) m.roughness = textureValue(m.roughnessTexture, uv).x;
-}
 
 // Next-event estimation from a Lambertian point p with normal n (facing the viewer):
 // one light picked by power, one shadow ray, MIS against cosine sampling. With media the shadow
@@ -251,37 +237,15 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     bool front = dot(s.dir, ns) < 0.0;
     vec3 n = front ? ns : -ns;  // faces the incoming ray
 #ifdef TELESCOPE_GLOSSY
-    // Mixed, transparency and thin sheets, resolved here to one material or a straight pass:
-    // - mixed: component 0 with probability ratio, else component 1, with the mixed albedo as
-    //   weight. Every estimate at this vertex (next-event estimation, BSDF sampling, and the MIS
-    //   weights between them, which use the chosen component's pdf both here and when the sampled
-    //   ray finds a light) is then the component's own unbiased estimator, so the expectation is
-    //   ratio E[0] + (1 - ratio) E[1]: the integral of the mixture ratio f0 + (1 - ratio) f1.
-    //   (Tungsten samples the mixture as one BSDF; the expectation is the same, no recursion here.)
-    // - transparency: straight on with probability 1 - alpha (weight 1), else its base (weight 1);
-    //   Tungsten's handleSurface draws the same way.
-    // - thinsheet: straight on with probability mean(T) (weight T / mean(T)), else the specular
-    //   reflection (weight R / (1 - mean(T))): shared/bsdf.h thinSheetScatter.
+    // Mixed and transparency materials resolved to one material or a straight pass
+    // (scene_common.glsl resolveComposite); thin sheets: straight on with probability mean(T)
+    // (weight T / mean(T)), else the specular reflection (weight R / (1 - mean(T))):
+    // shared/bsdf.h thinSheetScatter.
     // A straight pass is a bounce (Tungsten's loop counts every surface); it keeps the last
     // scattering vertex and its pdf for MIS, like a forward boundary.
     if ((kBsdfFamilies & (kFamilyMixed | kFamilyTransparency | kFamilyThinSheet)) != 0u) {
-        bool pass = false;
-        for (uint level = 0u; level < kMaxMaterialNesting; ++level) {
-            if ((kBsdfFamilies & kFamilyMixed) != 0u && m.type == kBsdfMixed) {
-                s.throughput *= m.albedo;
-                m = sceneMaterial(mixedComponent(m, rngNext(rng)));
-                if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);  // the component's own textures
-            } else if ((kBsdfFamilies & kFamilyTransparency) != 0u && m.type == kBsdfTransparency) {
-                if (rngNext(rng) >= m.alpha) {
-                    pass = true;
-                    break;
-                }
-                m = sceneMaterial(m.component0);
-                if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
-            } else {
-                break;
-            }
-        }
+        uint index = pr.material;
+        bool pass = resolveComposite(m, index, s.throughput, pr, hit.prim, hit.bary, p, rng);
         if (kHasMedia && m.type == kBsdfForward) pass = true;  // a forward boundary as a component
         bool reflected = false;
         if (!pass && (kBsdfFamilies & kFamilyThinSheet) != 0u && m.type == kBsdfThinSheet) {

@@ -23,6 +23,14 @@ uvec4 sortedTexel(Uvec4ArrayRef sorted, uint t) {
     return kSortedTexels ? texelFetch(sortedTexels, int(t)) : sorted.v[t];
 }
 
+// The BSDF factor of a photon arriving from direction w (towards where it came from) at the gather
+// vertex, divided by the cosine its flux already carries: the includer may define PHOTON_BSDF(w)
+// (gather.comp: the glossy materials of shared/bsdf.h); by default 1, for a Lambertian vertex
+// whose constant f the caller multiplies the sums by.
+#ifndef PHOTON_BSDF
+#define PHOTON_BSDF(w) vec3(1.0)
+#endif
+
 struct GatherSums {
     vec3 base;        // sum Phi_i W_{r_b}
     vec3 difference;  // sum Phi_i (W_{r'} - W_r)
@@ -77,8 +85,9 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
             float d2 = dot(d, d);
             if (!(d2 < rb2) || position.w > maxVertex) continue;
             uvec4 rest = sortedTexel(sorted, 2u * i + 1u);  // power, direction
-            if (dot(decodeDirection(rest.w), n) <= 0.0) continue;
-            vec3 power = uintBitsToFloat(rest.xyz);
+            vec3 w = decodeDirection(rest.w);
+            if (dot(w, n) <= 0.0) continue;
+            vec3 power = uintBitsToFloat(rest.xyz) * PHOTON_BSDF(w);
             s.found += 1u;
             s.base += power * kernelWeight(kernel, d2, rb2);
             if (difference && d2 < rj2) s.difference += power * kernelDifference(kernel, d2, rj2, logStep2);
@@ -158,8 +167,9 @@ GatherSums nearestSums(PhotonMapRef map, NearestPhotons s, vec3 n, float rb2, ui
         if (!(s.d2[j] < kInfinity)) continue;
         uvec4 rest = sortedTexel(sorted, 2u * s.index[j] + 1u);
         g.found += 1u;
-        if (dot(decodeDirection(rest.w), n) <= 0.0 || sortedTexel(sorted, 2u * s.index[j]).w > maxVertex) continue;
-        g.base += uintBitsToFloat(rest.xyz) * nearestKernelWeight(kernel, s.d2[j], r2);
+        vec3 w = decodeDirection(rest.w);
+        if (dot(w, n) <= 0.0 || sortedTexel(sorted, 2u * s.index[j]).w > maxVertex) continue;
+        g.base += uintBitsToFloat(rest.xyz) * PHOTON_BSDF(w) * nearestKernelWeight(kernel, s.d2[j], r2);
     }
     return g;
 }

@@ -1,9 +1,9 @@
 // Scene access shared by photon_trace.comp and gather.comp (GLSL only): the scene buffers, the
 // scene switches (same specialisation ids as path_trace), ray offsets, emission, light picking,
-// specular scattering, and the photon map reached by device address. The geometry comes through
+// the materials (shared/bsdf.h, textures, mixed), and the photon map reached by device address. The geometry comes through
 // scene_geometry.glsl: photon_trace reads it from uniform buffers when it fits and skips the BVH in
 // tiny scenes, as the path tracer does; the host turns both off for the gather (measured slower
-// there). The bindings keep the path tracer's numbers, 4-6 unused.
+// there). The bindings keep the path tracer's numbers; 4-6 (media) hold the gather's sorted photons.
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
 
@@ -15,11 +15,15 @@ layout(constant_id = kSpecTwoSided) const bool kTwoSided = true;
 layout(constant_id = kSpecRayEpsilon) const float kRayEpsilon = 1e-5;
 layout(constant_id = kSpecPhotonMaxBounces) const uint kPhotonMaxBounces = 64u;
 layout(constant_id = kSpecPhotonNextEvent) const bool kNextEvent = true;
+layout(constant_id = kSpecBsdfFamilies) const uint kBsdfFamilies = kFamilyAll;
+#define BSDF_FAMILIES kBsdfFamilies  // shared/bsdf.h: the glossy families this scene uses
+layout(constant_id = kSpecHasTextures) const bool kHasTextures = false;
 
 layout(std430, binding = kBindingPrims) readonly buffer PrimBuffer { Prim prims[]; };
 layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[]; };
 layout(std430, binding = kBindingMaterials) readonly buffer MaterialBuffer { MaterialGpu materials[]; };
 layout(std430, binding = kBindingLights) readonly buffer LightBuffer { LightGpu lights[]; };
+layout(std430, binding = kBindingTextures) readonly buffer TextureBuffer { vec4 textureData[]; };
 // (The path tracer may read these tables from uniform buffers: path_trace_main.glsl.)
 MaterialGpu sceneMaterial(uint i) { return materials[i]; }
 LightGpu sceneLight(uint i) { return lights[i]; }

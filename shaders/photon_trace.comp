@@ -1,7 +1,8 @@
 // photon_trace: one thread per photon path. A light is picked in proportion to its power, a
 // photon leaves it with power Phi / (p(light) N), follows mirror and dielectric bounces, and is
-// stored at every diffuse hit (from the second vertex on when direct light comes from next-event
-// estimation), then continues by cosine sampling with Russian roulette on its throughput.
+// stored at every hit whose material has a non-delta lobe (Lambert and the glossy materials; from
+// the second vertex on when direct light comes from next-event estimation), then continues by
+// sampling the BSDF with Russian roulette on its throughput.
 // A photon keeps its vertex index v (1: the first surface the light reaches, specular ones counted).
 // With Tungsten's max_bounces M a full path joins a photon at v to a camera chain of c vertices
 // (the gather vertex counted in both) and has v + c - 1 scattering vertices, at most M - 1 (the
@@ -104,16 +105,40 @@ void tracePhotonPath() {
         bool front = dot(dir, ns) < 0.0;
         vec3 n = front ? ns : -ns;  // faces the incoming photon
 
-        // ---- Scatter: store at diffuse vertices, then continue ----
-        vec3 scale;
+        // ---- Store where the material has a non-delta lobe ----
+        // (A mixture's photon is stored before it picks the component it scatters by: the incident
+        // flux does not depend on that choice, and a gather there draws its own component.)
+        bool nonDelta = m.type == kBsdfLambert || (kBsdfFamilies != 0u && (isGlossyBsdf(m.type) || m.type == kBsdfMixed));
+        if (nonDelta && (front || kTwoSided) && (!kNextEvent || v > 1u)) storePhoton(map, photons, capacity, p, -dir, power, v);
+
+        // ---- Scatter ----
+        if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
+        vec3 scale = vec3(1.0);
+        uint index = pr.material;
+        // mixed: one component (transparency is path tracing's: the loader refuses it here)
+        if (kBsdfFamilies != 0u) resolveComposite(m, index, scale, pr, hit.prim, hit.bary, p, rng);
         if (m.type == kBsdfLambert) {
             if (!front && !kTwoSided) return;
-            if (!kNextEvent || v > 1u) storePhoton(map, photons, capacity, p, -dir, power, v);
             dir = sampleCosineHemisphere(n, rngNext(rng), rngNext(rng));
             if (dot(dir, n) <= 0.0) return;
-            scale = m.albedo;
+            scale *= m.albedo;
         } else if (kHasSpecular && isSpecularBsdf(m.type)) {
-            scale = scatterSpecular(m, front, n, dir, rng);
+            scale *= scatterSpecular(m, front, n, dir, rng);
+        } else if (kBsdfFamilies != 0u && isGlossyBsdf(m.type)) {
+            // The glossy materials photon mapping takes are reciprocal (f(wi, wo) = f(wo, wi):
+            // tests/unit/glossy_bsdf_test.cpp), so a photon samples them as a camera path does,
+            // with wi towards where it came from, and its weight eval / pdf carries the cosine on
+            // the side it leaves by.
+            if (!front && !kTwoSided) return;
+            vec3 t, b;
+            buildFrame(n, t, b);
+            vec3 wi = vec3(dot(-dir, t), dot(-dir, b), dot(-dir, n));
+            vec3 wo, weight;
+            float pdf;
+            bool dirac;
+            if (!glossySample(m, wi, rng, wo, weight, pdf, dirac)) return;
+            dir = normalize(t * wo.x + b * wo.y + n * wo.z);
+            scale *= weight;
         } else {
             return;  // null: black and opaque
         }

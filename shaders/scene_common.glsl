@@ -1,8 +1,10 @@
 // Scene helpers shared by the path tracer and the photon passes (GLSL only; included after the
-// scene buffers, intersect.h and the specialisation constants kRayEpsilon, kLightCount,
-// kHasSpheres and kHasDisks). The CPU-tested parts live in shared/ (bsdf.h, emitter.h).
+// scene buffers (textureData[] among them), intersect.h and the specialisation constants
+// kRayEpsilon, kLightCount, kHasSpheres, kHasDisks, kHasTextures and kBsdfFamilies). The
+// CPU-tested parts live in shared/ (bsdf.h, emitter.h, texture.h).
 #include "shared/bsdf.h"
 #include "shared/emitter.h"
+#include "shared/texture.h"
 
 // ---- Shading normals ----
 layout(constant_id = kSpecSmoothNormals) const bool kSmoothNormals = false;
@@ -21,6 +23,47 @@ vec3 shadingNormal(uint prim, vec2 bary, vec3 ng) {
              bary.y * shadingNormals[3u * prim + 2u].xyz;
     float l = length(n);
     return l > 0.0 ? n / l : ng;
+}
+
+// ---- The material at a hit ----
+// Its textured parameters looked up at the hit's uv (only materials with a texture pay for the
+// uv; kHasTextures folds all of it out of scenes without textures).
+void applyTextures(inout MaterialGpu m, Prim pr, uint slot, vec2 bary, vec3 p) {
+    if (m.albedoTexture == kNoTexture && m.roughnessTexture == kNoTexture) return;
+    vec2 uv = primUv(slot, pr.type, bary, p, pr.p0);
+    if (m.albedoTexture != kNoTexture) {
+        m.albedo = textureValue(m.albedoTexture, uv);
+        // Plastics: the substrate's share of the sampling follows the albedo (layered.h).
+        m.substrateWeight = (m.albedo.x + m.albedo.y + m.albedo.z) / 3.0 * exp(-2.0 * (m.k.x + m.k.y + m.k.z) / 3.0);
+    }
+    if (m.roughnessTexture != kNoTexture) m.roughness = textureValue(m.roughnessTexture, uv).x;
+}
+
+// Mixed and transparency materials resolved to one material (index and value, textures applied)
+// or a straight pass (true):
+// - mixed: component 0 with probability ratio, else component 1, with the mixed albedo as weight.
+//   Every estimate at this vertex (next-event estimation, BSDF sampling, the MIS weights between
+//   them, a photon stored or gathered there) is then the component's own unbiased estimator, so
+//   the expectation is ratio E[0] + (1 - ratio) E[1]: the integral of the mixture ratio f0 +
+//   (1 - ratio) f1. (Tungsten samples the mixture as one BSDF; the expectation is the same.)
+// - transparency: straight on with probability 1 - alpha (weight 1), else its base (weight 1);
+//   Tungsten's handleSurface draws the same way.
+bool resolveComposite(inout MaterialGpu m, inout uint index, inout vec3 throughput, Prim pr, uint slot, vec2 bary,
+                      vec3 p, inout Rng rng) {
+    for (uint level = 0u; level < kMaxMaterialNesting; ++level) {
+        if ((kBsdfFamilies & kFamilyMixed) != 0u && m.type == kBsdfMixed) {
+            throughput *= m.albedo;
+            index = mixedComponent(m, rngNext(rng));
+        } else if ((kBsdfFamilies & kFamilyTransparency) != 0u && m.type == kBsdfTransparency) {
+            if (rngNext(rng) >= m.alpha) return true;
+            index = m.component0;
+        } else {
+            break;
+        }
+        m = sceneMaterial(index);
+        if (kHasTextures) applyTextures(m, pr, slot, bary, p);  // the component's own textures
+    }
+    return false;
 }
 
 // Offset along the geometric normal, to the side the next ray leaves from.

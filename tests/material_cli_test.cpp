@@ -58,18 +58,18 @@ TEST_F(MaterialCli, PlanListsTheThinMaterialFamilies) {
     EXPECT_TRUE(std::regex_search(readText(outFile), std::regex("\n  mixed +off"))) << readText(outFile);
 }
 
-TEST_F(MaterialCli, PhotonMappingRejectsAGlossyBsdfByItsKey) {
+TEST_F(MaterialCli, PhotonMappingRejectsARoughDielectricByItsKey) {
     const std::string exr = out("photons.exr");
     const CommandResult r = run("render " + sourcePath("scenes/point-plane-photon.json") + " -o " + exr +
-                                " --set bsdfs[0].type=rough_conductor");
+                                " --set bsdfs[0].type=rough_dielectric");
     EXPECT_EQ(r.exitCode, 2) << r.stderrText;
     EXPECT_NE(r.stderrText.find("point-plane-photon.json"), std::string::npos) << r.stderrText;
     EXPECT_NE(r.stderrText.find("bsdfs[0].type"), std::string::npos) << r.stderrText;
     EXPECT_NE(r.stderrText.find("photon mapping does not implement"), std::string::npos) << r.stderrText;
     EXPECT_FALSE(std::filesystem::exists(exr));
-    // The smooth conductor is one photon mapping implements (the photon plane with a gold floor).
+    // The rough conductor is one photon mapping implements (the photon plane with a gold floor).
     const CommandResult ok = run("render " + sourcePath("scenes/point-plane-photon.json") + " -o " + exr +
-                                 " --set bsdfs[0].type=conductor --set bsdfs[0].material=Au"
+                                 " --set bsdfs[0].type=rough_conductor --set bsdfs[0].material=Au"
                                  " --set camera.resolution=[8,8] --spp 1 -q --no-png");
     EXPECT_EQ(ok.exitCode, 0) << ok.stderrText;
     EXPECT_TRUE(std::filesystem::exists(exr));

@@ -44,60 +44,13 @@ const std::vector<RegionMean>& pathTracedRegions() {
     return regions;
 }
 
-// Batch means (red channel) of one photon-mapping render: [region][batch].
-std::vector<std::vector<double>> batchMeans(const Scene& scene, uint32_t batches, uint32_t samplesPerBatch,
-                                            uint32_t seed) {
-    const size_t regions = (kRes / kBlock) * (kRes / kBlock);
-    std::vector<std::vector<double>> out(regions);
-    std::vector<double> before(regions, 0.0);
-    Renderer renderer(sharedContext(), scene, seed);
-    for (uint32_t b = 0; b < batches; ++b) {
-        RenderRequest request;
-        request.spp = samplesPerBatch;
-        renderer.render(request);
-        Film film = renderer.film();
-        const double n = double(film.samplesPerPixel());
-        auto means = blockMeans(film, kBlock);
-        for (size_t r = 0; r < regions; ++r) {
-            const double sum = means[r].mean.x * n;
-            out[r].push_back((sum - before[r]) / samplesPerBatch);
-            before[r] = sum;
-        }
-    }
-    return out;
-}
-
-struct Verdict {
-    size_t tFailures = 0;
-    double worstT = 0.0;
-};
-
-// Per region: a t-test of the batch means against the path tracer's mean, with the batch means'
-// own spread plus the path tracer's variance of the mean (Student quantile with B - 1 degrees of
-// freedom), Sidak-corrected over the regions, as the analytic-plane photon tests do. Unbiased
-// photon mapping has infinite variance (tail index 1.45: docs/PHOTON-MAPPING.md), so the batch
-// spread is itself heavy-tailed; its large deviations make the test conservative rather than
-// liberal. The analytic-plane tests add a sign test; here it does not apply: the reference has
-// its own noise, and a block sample's median lies below its mean (the correction's tail is
+// The batches' region means against the path tracer's (red channel): region_stats.h
+// compareBatchMeans. The analytic-plane tests add a sign test; here it does not apply: the reference
+// has its own noise, and a block sample's median lies below its mean (the correction's tail is
 // one-sided at the floor's smooth irradiance), which shifted 3 of 32 batch means above the answer
 // in a region whose t was -1.5.
-Verdict compare(const std::vector<std::vector<double>>& batches, const std::vector<RegionMean>& reference,
-                const char* label) {
-    const uint32_t n = uint32_t(batches[0].size());
-    const double tLimit = sidakThresholdT(kAlpha, batches.size(), n - 1.0);
-    Verdict v;
-    for (size_t r = 0; r < batches.size(); ++r) {
-        double mean = 0.0, var = 0.0;
-        for (double m : batches[r]) mean += m / n;
-        for (double m : batches[r]) var += (m - mean) * (m - mean) / (n - 1.0);
-        const double t = (mean - reference[r].mean.x) / std::sqrt(var / n + reference[r].variance.x);
-        v.worstT = std::max(v.worstT, std::abs(t));
-        if (std::abs(t) > tLimit) ++v.tFailures;
-        std::printf("%s region %2zu: %.5f vs %.5f (t %+.2f)\n", label, r, mean, reference[r].mean.x, t);
-    }
-    std::printf("%s: %zu of %zu regions fail (t limit %.2f, worst |t| %.2f)\n", label, v.tFailures, batches.size(),
-                tLimit, v.worstT);
-    return v;
+BatchVerdict compare(const Scene& scene, const std::vector<RegionMean>& reference, const char* label) {
+    return compareBatchMeans(regionBatchMeans(scene, kBlock, 32, 4, 5), reference, 1, kAlpha, label);
 }
 
 class PhotonRefraction : public ::testing::Test {
@@ -111,12 +64,12 @@ TEST_F(PhotonRefraction, UnbiasedBlocksThroughWaterMatchThePathTracerAndTheOldSc
     const std::vector<RegionMean> reference = pathTracedRegions();
     const std::string unbiased = R"({"type": "photon_map", "photon_count": 10000, "gather_radius": 0.2,
         "max_bounces": 64, "debias": {"estimator": "single_term", "level_schedule": "uniform"})";
-    const Verdict right = compare(batchMeans(pool(unbiased + "}"), 32, 4, 5), reference, "scaled");
-    EXPECT_EQ(right.tFailures, 0u);
+    const BatchVerdict right = compare(pool(unbiased + "}"), reference, "scaled");
+    EXPECT_EQ(right.failures, 0u);
     // The control: the same photons, pixels and levels (same seed) without the camera side's 1/eta^2.
-    const Verdict old = compare(batchMeans(pool(unbiased + R"(, "test_radiance_scaling": false})"), 32, 4, 5),
-                                reference, "unscaled (control)");
-    EXPECT_GE(old.tFailures, 12u) << "the control must fail in most regions";
+    const BatchVerdict old = compare(pool(unbiased + R"(, "test_radiance_scaling": false})"), reference,
+                                     "unscaled (control)");
+    EXPECT_GE(old.failures, 12u) << "the control must fail in most regions";
 }
 
 TEST_F(PhotonRefraction, ProgressivePhotonMappingThroughWaterAgreesWithThePathTracer) {

@@ -1,6 +1,10 @@
 #include "region_stats.h"
 
+#include <algorithm>
+#include <cstdio>
+
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 namespace telescope::test {
 
@@ -159,6 +163,36 @@ SignTestBounds sidakSignTest(double alpha, size_t tests, uint32_t n) {
     b.k = n / 2;
     b.rate = 2.0 * cdf;
     return b;
+}
+
+}  // namespace telescope::test
+
+namespace telescope::test {
+
+BatchVerdict compareBatchMeans(const std::vector<std::vector<glm::dvec3>>& batches,
+                               const std::vector<RegionMean>& reference, uint32_t channels, double alpha,
+                               const char* label) {
+    BatchVerdict v;
+    if (batches.empty() || batches.size() != reference.size()) {
+        ADD_FAILURE() << label << ": " << batches.size() << " regions of batches against " << reference.size();
+        return v;
+    }
+    const double n = double(batches[0].size());
+    v.tests = batches.size() * channels;
+    v.limit = sidakThresholdT(alpha, v.tests, n - 1.0);
+    for (size_t r = 0; r < batches.size(); ++r)
+        for (uint32_t c = 0; c < channels; ++c) {
+            double mean = 0.0, var = 0.0;
+            for (const glm::dvec3& m : batches[r]) mean += m[c] / n;
+            for (const glm::dvec3& m : batches[r]) var += (m[c] - mean) * (m[c] - mean) / (n - 1.0);
+            const double t = (mean - reference[r].mean[c]) / std::sqrt(var / n + reference[r].variance[c]);
+            v.worstT = std::max(v.worstT, std::abs(t));
+            if (!(std::abs(t) <= v.limit)) ++v.failures;
+            std::printf("%s region %2zu %c: %.5f vs %.5f (t %+.2f)\n", label, r, "RGB"[c], mean, reference[r].mean[c], t);
+        }
+    std::printf("%s: %zu of %zu region-channel tests fail (t limit %.2f, worst |t| %.2f)\n", label, v.failures, v.tests,
+                v.limit, v.worstT);
+    return v;
 }
 
 }  // namespace telescope::test

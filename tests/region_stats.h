@@ -67,4 +67,21 @@ struct SignTestBounds {
 };
 SignTestBounds sidakSignTest(double alpha, size_t tests, uint32_t n);
 
+// Per region and channel (the first `channels` of R, G, B): a t-test of the batch means
+// ([region][batch], render_harness.h regionBatchMeans) against the reference's mean, with the
+// batch means' own spread plus the reference's variance of the mean (Student quantile with
+// B - 1 degrees of freedom), Sidak-corrected over regions x channels at false-alarm rate alpha.
+// Valid for heavy-tailed estimators too (unbiased photon mapping: tail index 1.45,
+// docs/PHOTON-MAPPING.md): their large deviations inflate the batch spread, which makes the test
+// conservative rather than liberal. Prints every region under `label`.
+struct BatchVerdict {
+    size_t failures = 0;  // region-channel tests beyond the limit
+    size_t tests = 0;
+    double worstT = 0.0;
+    double limit = 0.0;
+};
+BatchVerdict compareBatchMeans(const std::vector<std::vector<glm::dvec3>>& batches,
+                               const std::vector<RegionMean>& reference, uint32_t channels, double alpha,
+                               const char* label);
+
 }  // namespace telescope::test

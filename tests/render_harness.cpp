@@ -1,5 +1,7 @@
 #include "render_harness.h"
 
+#include "region_stats.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -23,6 +25,30 @@ Film renderFilm(const Scene& scene, uint64_t spp, uint32_t seed) {
     renderer.render(request);
     expectLoopsComplete(renderer.stats());
     return renderer.film();
+}
+
+std::vector<std::vector<glm::dvec3>> regionBatchMeans(const Scene& scene, uint32_t block, uint32_t batches,
+                                                      uint32_t samplesPerBatch, uint32_t seed) {
+    std::vector<std::vector<glm::dvec3>> out;
+    std::vector<glm::dvec3> before;
+    Renderer renderer(sharedContext(), scene, seed);
+    for (uint32_t b = 0; b < batches; ++b) {
+        RenderRequest request;
+        request.spp = samplesPerBatch;
+        renderer.render(request);
+        expectLoopsComplete(renderer.stats());
+        const Film film = renderer.film();
+        const double n = double(film.samplesPerPixel());
+        const std::vector<RegionMean> means = blockMeans(film, block);
+        out.resize(means.size());
+        before.resize(means.size(), glm::dvec3(0.0));
+        for (size_t r = 0; r < means.size(); ++r) {
+            const glm::dvec3 sum = means[r].mean * n;
+            out[r].push_back((sum - before[r]) / double(samplesPerBatch));
+            before[r] = sum;
+        }
+    }
+    return out;
 }
 
 void expectLoopsComplete(const RenderStats& stats) {

@@ -21,6 +21,13 @@ std::string sourcePath(const std::string& relative);
 Scene loadTestScene(const std::string& relative, const std::vector<SceneOverride>& overrides = {});
 Film renderFilm(const Scene& scene, uint64_t spp, uint32_t seed);
 
+// Batch means of one render, [region][batch], per colour channel: `batches` renders of
+// `samplesPerBatch` samples each, continuing one Renderer (regions: blocks of `block` x `block`
+// pixels, row-major). For estimators whose variance may be infinite (unbiased photon mapping): the
+// batches' own spread stands in for a variance that may not exist (region_stats.h compareBatchMeans).
+std::vector<std::vector<glm::dvec3>> regionBatchMeans(const Scene& scene, uint32_t block, uint32_t batches,
+                                                      uint32_t samplesPerBatch, uint32_t seed);
+
 // Fails the current test if lavapipe's loop cap ended loops or the loop budget dropped samples.
 void expectLoopsComplete(const RenderStats& stats);
 

@@ -195,6 +195,22 @@ FN float glossyPdf(MaterialGpu m, vec3 wi, vec3 wo) {
     return 0.0f;
 }
 
+// The Dirac lobe among a glossy material's lobes (plastic's smooth coat; none for the others):
+// the probability p with which glossySample takes it from wi, and the lobe's reflectance. A camera
+// chain of photon mapping (shaders/gather.comp) follows that lobe with probability p, weight
+// reflectance / p, and gathers the other lobes with weight 1 / (1 - p).
+FN float glossyDiracProbability(MaterialGpu m, vec3 wi) {
+    if ((BSDF_FAMILIES & kFamilyPlastic) != 0u && m.type == kBsdfPlastic && wi.z > 0.0f)
+        return plasticSpecularProbability(plasticParams(m), wi.z);
+    return 0.0f;
+}
+
+FN float glossyDiracReflectance(MaterialGpu m, vec3 wi) {
+    if ((BSDF_FAMILIES & kFamilyPlastic) != 0u && m.type == kBsdfPlastic && wi.z > 0.0f)
+        return fresnelDielectricSigned(wi.z, m.ior);
+    return 0.0f;
+}
+
 // Draws wo from the material's sampling routine: false when the sample is lost. `specular` says
 // the sample came from a Dirac lobe (its pdf is then not a solid-angle density).
 FN bool glossySample(MaterialGpu m, vec3 wi, INOUT(Rng) rng, OUT(vec3) wo, OUT(vec3) weight, OUT(float) pdf,

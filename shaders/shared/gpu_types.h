@@ -137,7 +137,7 @@ CONST uint kMaxUniformPrims = 1024u;     // kUniformSceneBytes / sizeof(Prim)
 CONST uint kMaxUniformMaterials = 682u;  // kUniformSceneBytes / sizeof(MaterialGpu), rounded down
 CONST uint kMaxUniformLights = 1365u;    // ... / sizeof(LightGpu)
 CONST uint kMaxUniformMedia = 273u;      // ... / sizeof(MediumGpu)
-CONST uint kSceneBindingCount = 15u;     // photon_trace and gather: the scene only (4-6 and 9-13 unused; the gather's texels at 9)
+CONST uint kSceneBindingCount = 15u;     // photon_trace and gather: the scene only (4-6 and 10-13 unused; the gather's texels at 4)
 
 // Specialisation constant ids: features a scene lacks are folded away by the compiler.
 CONST uint kSpecMaxBounces = 0u;
@@ -297,6 +297,7 @@ CONST uint kSpecPhotonRadianceScaling = 52u;  // 1; 0 only in tests: no 1/eta^2 
 CONST uint kSpecPhotonNextEvent = 53u;   // direct light by next-event estimation, not photons
 CONST uint kSpecGridStage = 54u;         // hash_grid_build: which stage this pipeline runs
 CONST uint kSpecPhotonMaxBounces = 55u;  // scattering vertices of a photon path / camera chain
+CONST uint kSpecPhotonTestCosine = 57u;  // 0; 1 only in tests: glossy gathers weight photons by f |cos| (a control)
 CONST uint kSpecSortedTexels = 56u;      // gatherPhotons reads the sorted photons as texels (1) or by address (0)
 
 
@@ -309,9 +310,9 @@ CONST uint kGridStageAdd = 2u;      // adds the scanned block totals back
 CONST uint kGridStageScatter = 3u;  // sorted[cellStart[h]++] = photon (a copy, read in order by the gather)
 CONST uint kGridStageQuery = 4u;    // kernel sums at query points (tests)
 
-// The gather's bindings: the scene's (kSceneBindingCount), then the sorted photons as a uniform
-// texel buffer (photon_gather.glsl).
-CONST uint kBindingSortedTexels = 9u;
+// The gather's bindings: the scene's (kSceneBindingCount), the sorted photons as a uniform texel
+// buffer (photon_gather.glsl) in the media's place (photon mapping scenes have no media).
+CONST uint kBindingSortedTexels = 4u;
 CONST uint kGatherBindingCount = 15u;
 
 CONST uint kPhotonTraceGroupSize = 64u;
@@ -323,7 +324,7 @@ CONST uint kGatherGroupSize = 8u;   // 8x8 pixel tiles
 // kGatherSlicePhotons photons of each of its 8 buckets per dispatch: a pass whose fullest bucket
 // holds more runs the gather in several slices (dispatches), each adding its part of the sums.
 CONST uint kGatherSlicePhotons = 4096u;
-CONST uint kGatherBlockVec4s = 10u;  // per-pixel block buffer of the gather (gather.comp)
+CONST uint kGatherBlockVec4s = 12u;  // per-pixel block buffer of the gather (gather.comp)
 // k-nearest gathers keep the k nearest photons (squared distance, sorted index) of a pixel across
 // slices: after the block vec4s, kMaxGatherCount / 2 vec4 more per pixel.
 CONST uint kMaxGatherCount = 64u;

@@ -134,6 +134,10 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
     feature("disks", f.disks, "disk primitives present", "no disk primitives");
     feature("specular", f.specular, "mirror, dielectric or conductor materials present",
             "no mirror, dielectric or conductor materials");
+    feature("glossy", f.bsdfFamilies != 0u,
+            "glossy, plastic or mixed materials present: photons sample them, gathers weight each photon by the BSDF",
+            "Lambert and delta materials only");
+    feature("textures", f.textures, "textured material parameters (uvs computed at their hits)", "no textures");
     feature("next event", nee, "direct_lighting = next_event", "direct_lighting = photons: all light from photons");
     feature("debias", unbiased(in), "debias block: blocks of passes, K_r_b + correction", "no debias block: biased K_r");
     feature("uniform scene", f.fitsUniforms, "photon_trace reads BVH nodes and primitives from uniform buffers",
@@ -158,10 +162,13 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         {kSpecPhotonNextEvent, nee},
         {kSpecPhotonGatherCount, ph.gatherCount},
         {kSpecPhotonRadianceScaling, ph.testRadianceScaling},
+        {kSpecPhotonTestCosine, ph.testGatherCosine},
         {kSpecPhotonMaxBounces, in.maxBounces},
         {kSpecSceneInUniforms, f.fitsUniforms},
         {kSpecBruteForcePrims, f.bruteForcePrims},
         {kSpecSmoothNormals, f.smoothNormals},
+        {kSpecBsdfFamilies, f.bsdfFamilies},
+        {kSpecHasTextures, f.textures},
     };
 }
 
@@ -187,10 +194,10 @@ public:
                            (shader::kGatherBlockVec4s + (scene.integrator.photon.gatherCount + 1) / 2) * 16,
                        "gather blocks") {
         blockBuffer_.fill(0);
-        // Bindings 4-6 and 9-13 (media, textures and uniform tables in the path tracer) are declared
-        // by neither shader: any buffer will do (the gather binds its texels at 9).
-        scene_ = {b.prims,  b.nodes,  b.materials, b.lights, b.lights, b.lights, b.lights,        b.nodes,
-                  b.prims,  b.lights, b.lights,    b.lights, b.lights, b.lights, b.shadingNormals};
+        // Bindings 4-6 and 10-13 (media, the environment and uniform tables in the path tracer) are
+        // declared by neither shader: any buffer will do (the gather binds its texels at 4).
+        scene_ = {b.prims,    b.nodes,  b.materials, b.lights, b.lights, b.lights, b.lights,        b.nodes,
+                  b.prims,    b.textures, b.lights,  b.lights, b.lights, b.lights, b.shadingNormals};
         trace_.bindBuffers(scene_);
         gatherTexels_ = map_.texelsFit();  // as the gather pipeline was created
         bindGather();

@@ -71,10 +71,13 @@ struct Material {
     float alpha = 1.0f;
 };
 
-// Whether the photon tracer and gather implement a material (the others are path tracing's).
+// Whether the photon tracer and gather implement a material (the others are path tracing's: the
+// rough dielectric's transmission is not reciprocal, and thin sheets and transparency need shadow
+// rays that pass them).
 inline bool photonsSupport(BsdfType t) {
     return t == BsdfType::Lambert || t == BsdfType::Mirror || t == BsdfType::Dielectric || t == BsdfType::Null ||
-           t == BsdfType::Forward || t == BsdfType::Conductor;
+           t == BsdfType::Forward || t == BsdfType::Conductor || t == BsdfType::RoughConductor ||
+           t == BsdfType::Plastic || t == BsdfType::RoughPlastic || t == BsdfType::OrenNayar || t == BsdfType::Mixed;
 }
 
 enum class GeometryType : uint32_t {
@@ -272,6 +275,9 @@ struct PhotonSettings {
     // Test-only ("test_radiance_scaling"): false drops the 1/eta^2 of a refraction on the camera
     // side, the old, wrong transport (the positive control of the refraction tests).
     bool testRadianceScaling = true;
+    // Test-only ("test_gather_cosine"): true weights each photon at a glossy gather vertex by
+    // f |cos wo| instead of f (the cosine counted twice: the positive control of the glossy tests).
+    bool testGatherCosine = false;
 };
 // "transmittance_estimator": {"type": ..., "level": k, "pmf": {...}} (docs/MEDIA.md).
 struct TransmittanceEstimatorSettings {

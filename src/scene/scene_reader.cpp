@@ -181,13 +181,6 @@ void SceneReader::read(const json& doc) {
                 fail(member(m.key, "type"),
                      "photon mapping does not implement this bsdf; render the scene with "
                      "integrator.type \"path_tracer\"");
-    // ... nor textures (the photon passes have no uv at their hits).
-    if (usesPhotons(scene_.integrator))
-        for (const Material& m : scene_.materials)
-            if (m.albedoTexture >= 0 || m.roughnessTexture >= 0)
-                fail(member(m.key, m.albedoTexture >= 0 ? "albedo" : "roughness"),
-                     "photon mapping does not implement textured materials; render the scene with "
-                     "integrator.type \"path_tracer\"");
     ignoreUnread(doc, "", {"media", "bsdfs", "primitives", "camera", "integrator", "renderer"});
 }
 

@@ -116,6 +116,7 @@ void to_json(json& j, const PhotonSettings& p) {
          {"direct_lighting", nameOf(kDirectLightingNames, p.directLighting)},
          {"gather_photon_count", p.gatherCount}};
     if (!p.testRadianceScaling) j["test_radiance_scaling"] = false;
+    if (p.testGatherCosine) j["test_gather_cosine"] = true;
 }
 
 void from_json(const json& j, PhotonSettings& p) {
@@ -126,6 +127,7 @@ void from_json(const json& j, PhotonSettings& p) {
     readName(j, "direct_lighting", kDirectLightingNames, p.directLighting);
     readValue(j, "gather_photon_count", p.gatherCount);
     p.testRadianceScaling = j.value("test_radiance_scaling", true);  // written only when false
+    p.testGatherCosine = j.value("test_gather_cosine", false);       // written only when true
 }
 
 // ---- Integrator ----
