@@ -8,7 +8,9 @@
 //   kHasSpheres, kHasDisks   bool constants (specialisation constants in GLSL, true in C++),
 //   BVH_COUNT_NODE_VISIT()   optional: a statement run once per node entered (a test counter),
 //   BVH_BRUTE_FORCE_PRIMS    optional: a constant n > 0 tests the n primitives one after the other
-//                            instead of walking the tree (tiny scenes; see kSpecBruteForcePrims).
+//                            instead of walking the tree (tiny scenes; see kSpecBruteForcePrims);
+//   BVH_BRUTE_FORCE_COUNT    optional: the loop's trip count, equal to BVH_BRUTE_FORCE_PRIMS but
+//                            possibly hidden from the compiler (scene_geometry.glsl says why).
 // Part 2 has internal linkage in C++, so each translation unit binds its own buffers.
 //
 // Rays are origin + t dir with dir non-zero (not necessarily unit); hits count for t strictly
@@ -165,6 +167,9 @@ SHADER_NAMESPACE_END
 #ifndef BVH_BRUTE_FORCE_PRIMS
 #define BVH_BRUTE_FORCE_PRIMS 0u
 #endif
+#ifndef BVH_BRUTE_FORCE_COUNT
+#define BVH_BRUTE_FORCE_COUNT BVH_BRUTE_FORCE_PRIMS
+#endif
 
 #ifdef __cplusplus
 #define TRACE_FN static inline
@@ -202,7 +207,7 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
     if (BVH_BRUTE_FORCE_PRIMS > 0u) {
         // Every primitive in turn: a loop of constant length over uniform data, with no stack.
         LOOP_BUDGET_TICK(BVH_BRUTE_FORCE_PRIMS);
-        for (uint i = 0u; i < BVH_BRUTE_FORCE_PRIMS; ++i) {
+        for (uint i = 0u; i < BVH_BRUTE_FORCE_COUNT; ++i) {
             float t = 0.0f;
             vec2 bary = vec2(0.0f);
             if (intersectPrim(BVH_PRIM(i), origin, dir, 0.0f, hit.t, t, bary)) {
