@@ -120,7 +120,14 @@ GatherVertex traceCameraChain(vec3 origin, vec3 dir, inout Rng rng) {
     // light sample at v joins paths of at least v (photon_trace.comp: at most max_bounces - 1).
     for (uint v = 1u; v <= kPhotonMaxBounces; ++v) {
         Hit hit;
-        if (!traceClosest(origin, dir, kInfinity, hit)) break;
+        if (!traceClosest(origin, dir, kInfinity, hit)) {
+            // Lights at infinity seen from the camera or through delta bounces (no MIS: the chain's
+            // scattering so far is all delta).
+            if (kEnvironmentLight != 0xffffffffu) gv.light += throughput * environmentRadiance(sceneLight(kEnvironmentLight), dir);
+            if (kCapLight != 0xffffffffu && dot(dir, sceneLight(kCapLight).position) >= sceneLight(kCapLight).cosCap)
+                gv.light += throughput * sceneLight(kCapLight).radiance;
+            break;
+        }
         Prim pr = scenePrim(hit.prim);
         vec3 p, ng;
         hitPoint(pr, origin, dir, hit.t, p, ng);

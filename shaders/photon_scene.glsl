@@ -18,12 +18,20 @@ layout(constant_id = kSpecPhotonNextEvent) const bool kNextEvent = true;
 layout(constant_id = kSpecBsdfFamilies) const uint kBsdfFamilies = kFamilyAll;
 #define BSDF_FAMILIES kBsdfFamilies  // shared/bsdf.h: the glossy families this scene uses
 layout(constant_id = kSpecHasTextures) const bool kHasTextures = false;
+layout(constant_id = kSpecEnvironmentLight) const uint kEnvironmentLight = 0xffffffffu;
+layout(constant_id = kSpecCapLight) const uint kCapLight = 0xffffffffu;
+layout(constant_id = kSpecEnvironmentMap) const bool kEnvironmentMap = false;
 
 layout(std430, binding = kBindingPrims) readonly buffer PrimBuffer { Prim prims[]; };
 layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[]; };
 layout(std430, binding = kBindingMaterials) readonly buffer MaterialBuffer { MaterialGpu materials[]; };
 layout(std430, binding = kBindingLights) readonly buffer LightBuffer { LightGpu lights[]; };
 layout(std430, binding = kBindingTextures) readonly buffer TextureBuffer { vec4 textureData[]; };
+// The environment image and its sampling tables (shared/environment_map.h), read only when the
+// environment light has one.
+layout(std430, binding = kBindingEnvironment) readonly buffer EnvironmentBuffer { float envData[]; };
+#define ENV_DATA(i) envData[i]
+#include "shared/environment_map.h"
 // (The path tracer may read these tables from uniform buffers: path_trace_main.glsl.)
 MaterialGpu sceneMaterial(uint i) { return materials[i]; }
 LightGpu sceneLight(uint i) { return lights[i]; }

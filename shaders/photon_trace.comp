@@ -61,6 +61,37 @@ void emitPhoton(uint path, inout Rng rng, out vec3 origin, out vec3 dir, out vec
         power = light.radiance * (4.0 * kPi / light.pmf) * pc.pathScale;
         return;
     }
+    if (light.type == kLightEnvironment || light.type == kLightCap) {
+        // A light at infinity: a direction w towards it (the light sampling's own routine, pdf p(w)),
+        // then a uniform point of the disk of radius R that faces w on the sphere around the
+        // geometry; the photon enters along -w. Every ray from the light that can reach the
+        // geometry crosses that disk once, and the flux through it is L(w) pi R^2 per unit solid
+        // angle, so the photon carries L(w) pi R^2 / p(w) (the light selection's power uses the
+        // same disk: render/gpu_scene.cpp).
+        vec3 w, radiance = light.radiance;
+        float pdf;
+        if (light.type == kLightCap) {
+            w = sampleUniformCone(light.position, light.cosCap, u1, u2);
+            pdf = 1.0 / (2.0 * kPi * (1.0 - light.cosCap));
+        } else if (kEnvironmentMap) {
+            vec2 uv;
+            if (!envSample(vec2(u1, u2), w, uv, pdf)) {
+                origin = pc.sceneCentre;
+                dir = vec3(0.0, 0.0, 1.0);
+                power = vec3(0.0);  // lost (a pole of the image): nothing carried
+                return;
+            }
+            radiance = envLookup(uv);
+        } else {
+            w = sampleUniformSphere(u1, u2);
+            pdf = 1.0 / (4.0 * kPi);
+        }
+        float r = pc.sceneRadius;
+        origin = sampleDisk(pc.sceneCentre + w * r, w, r, u3, u4);
+        dir = -w;
+        power = radiance * (kPi * r * r / (pdf * light.pmf)) * pc.pathScale;
+        return;
+    }
     // Area light of radiance L: flux pi A L, uniform points, cosine-distributed directions.
     Prim pr = scenePrim(light.prim);
     vec3 q, nq;
@@ -94,6 +125,7 @@ void tracePhotonPath() {
 
     vec3 origin, dir, power;
     emitPhoton(path, rng, origin, dir, power);
+    if (!any(greaterThan(power, vec3(0.0)))) return;
     for (uint v = 1u; v + 1u <= kPhotonMaxBounces; ++v) {
         Hit hit;
         if (!traceClosest(origin, dir, kInfinity, hit)) return;

@@ -371,6 +371,7 @@ struct PhotonTracePush {
     float pathScale;  // 1 / pathCount
     uint rowThreads;  // threads per row of the 2D dispatch: path = y * rowThreads + x
     uint passInBlock; // pass within the block (unbiased photon mapping), else 0
+    vec3 sceneCentre; float sceneRadius;  // a sphere around the geometry: lights at infinity emit through its disk
 };
 
 struct HashGridPush {
@@ -415,7 +416,7 @@ SHADER_NAMESPACE_END
 #ifdef __cplusplus
 static_assert(sizeof(telescope::shader::Photon) == 32);
 static_assert(sizeof(telescope::shader::PhotonMapHeader) == 128);
-static_assert(sizeof(telescope::shader::PhotonTracePush) == 32);
+static_assert(sizeof(telescope::shader::PhotonTracePush) == 48);
 static_assert(sizeof(telescope::shader::HashGridPush) == 64);
 static_assert(sizeof(telescope::shader::GatherPush) == 128);
 #endif

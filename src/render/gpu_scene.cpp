@@ -194,6 +194,7 @@ GpuScene buildGpuScene(const Scene& scene) {
     }
     f.sceneExtent = scene.geometry.empty() ? 1.0f : glm::length(all.hi - all.lo);
     if (!(f.sceneExtent > 0.0f) || !std::isfinite(f.sceneExtent)) f.sceneExtent = 1.0f;
+    f.sceneCentre = scene.geometry.empty() ? glm::vec3(0.0f) : 0.5f * (all.lo + all.hi);
     Bvh bvh = buildBvh(boxes);
     for (const BvhNodeHost& n : bvh.nodes) out.nodes.push_back({n.lo, n.first, n.hi, n.count});
 

@@ -23,6 +23,7 @@ struct SceneFeatures {
     uint32_t capLight = 0xffffffffu;          // the infinite_sphere_cap light, index in the light table
     uint32_t lightCount = 0;
     float sceneExtent = 1.0f;   // bounding-box diagonal of the geometry (1 when empty)
+    glm::vec3 sceneCentre{0.0f};  // the bounding box's centre: with sceneExtent / 2, a sphere around the geometry
     bool media = false;         // participating media or forward (medium boundary) surfaces
     bool grids = false;         // grid media
     bool inhomogeneous = false; // media whose density varies (exponential falloff or grid)

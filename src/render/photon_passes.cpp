@@ -138,6 +138,9 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
             "glossy, plastic or mixed materials present: photons sample them, gathers weight each photon by the BSDF",
             "Lambert and delta materials only");
     feature("textures", f.textures, "textured material parameters (uvs computed at their hits)", "no textures");
+    feature("lights at infinity", f.environment || f.capLight != 0xffffffffu,
+            "infinite_sphere or infinite_sphere_cap: photons enter through the disk of the scene's bounding sphere",
+            "no infinite_sphere or infinite_sphere_cap");
     feature("next event", nee, "direct_lighting = next_event", "direct_lighting = photons: all light from photons");
     feature("debias", unbiased(in), "debias block: blocks of passes, K_r_b + correction", "no debias block: biased K_r");
     feature("uniform scene", f.fitsUniforms, "photon_trace reads BVH nodes and primitives from uniform buffers",
@@ -147,6 +150,8 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
             fmt::format("BVH traversal over {} primitives (brute force takes at most {}, in uniform buffers)",
                         f.primCount, kMaxBruteForcePrims));
     plan.featuresOf = "photon_trace and gather";
+    plan.photonSceneCentre = f.sceneCentre;
+    plan.photonSceneRadius = 0.5f * f.sceneExtent;  // the same disk as the light selection's power (gpu_scene.cpp)
 
     plan.photonSpec = {
         {kSpecHasSpheres, f.spheres},
@@ -169,6 +174,9 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         {kSpecSmoothNormals, f.smoothNormals},
         {kSpecBsdfFamilies, f.bsdfFamilies},
         {kSpecHasTextures, f.textures},
+        {kSpecEnvironmentLight, f.environmentLight},
+        {kSpecCapLight, f.capLight},
+        {kSpecEnvironmentMap, f.environmentMap},
     };
 }
 
@@ -194,10 +202,10 @@ public:
                            (shader::kGatherBlockVec4s + (scene.integrator.photon.gatherCount + 1) / 2) * 16,
                        "gather blocks") {
         blockBuffer_.fill(0);
-        // Bindings 4-6 and 10-13 (media, the environment and uniform tables in the path tracer) are
-        // declared by neither shader: any buffer will do (the gather binds its texels at 4).
-        scene_ = {b.prims,    b.nodes,  b.materials, b.lights, b.lights, b.lights, b.lights,        b.nodes,
-                  b.prims,    b.textures, b.lights,  b.lights, b.lights, b.lights, b.shadingNormals};
+        // Bindings 4-6 and 11-13 (media and uniform tables in the path tracer) are declared by
+        // neither shader: any buffer will do (the gather binds its texels at 4).
+        scene_ = {b.prims,    b.nodes,  b.materials,   b.lights, b.lights, b.lights, b.lights,        b.nodes,
+                  b.prims,    b.textures, b.environment, b.lights, b.lights, b.lights, b.shadingNormals};
         trace_.bindBuffers(scene_);
         gatherTexels_ = map_.texelsFit();  // as the gather pipeline was created
         bindGather();
@@ -206,6 +214,8 @@ public:
         tracePush_.pathCount = paths;
         tracePush_.seed = seed;
         tracePush_.pathScale = 1.0f / float(paths);
+        tracePush_.sceneCentre = plan.photonSceneCentre;
+        tracePush_.sceneRadius = plan.photonSceneRadius;
         setPushCamera(gatherPush_, cam);
         gatherPush_.width = cam.width;
         gatherPush_.height = cam.height;

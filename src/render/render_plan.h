@@ -46,6 +46,10 @@ struct RenderPlan {
     std::vector<gpu::SpecConstant> pathTraceSpec;  // path_trace
     std::string pathTraceShader = "path_trace";    // or "path_trace_glossy" (glossy materials present)
     std::vector<gpu::SpecConstant> photonSpec;     // photon_trace and gather
+    // photon_trace: a sphere around the geometry (centre, radius); lights at infinity (the
+    // environment, a cap) emit their photons through its disk facing each direction.
+    glm::vec3 photonSceneCentre{0.0f};
+    float photonSceneRadius = 1.0f;
     std::string featuresOf = "path_trace";         // the pipeline(s) the feature switches describe
     std::string estimator;               // one line describing the estimator
     LevelSchedule levelSchedule = LevelSchedule::PerPixel;  // as run (per_pixel unless debiased)

@@ -159,10 +159,6 @@ void SceneReader::readPhotonSettings(const json& v, const std::string& key) {
     IntegratorSettings& s = scene_.integrator;
     PhotonSettings& p = s.photon;
     const std::string type = string(v["type"], "integrator.type");
-    for (const PointLikeLight& l : scene_.lights)
-        if (l.type == LightType::Environment || l.type == LightType::Cap)
-            fail("integrator.type", fmt::format("'{}' does not support {} emitters (light '{}')", type,
-                                                l.type == LightType::Cap ? "infinite_sphere_cap" : "infinite_sphere", l.name));
 
     if (const json* n = find(v, "min_bounces"); n && integer(*n, "integrator.min_bounces", 0, kMaxBounces) != 0)
         fail("integrator.min_bounces", "photon mapping supports only min_bounces = 0");
