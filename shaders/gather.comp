@@ -57,8 +57,10 @@ layout(push_constant) uniform Push { GatherPush pc; };
 // shadow ray, f = the Lambert albedo / pi (glossy false) or the glossy BSDF in the frame (t, b, n)
 // for wi (local). No MIS: the camera chain stops at this vertex, so no BSDF sample could find the
 // light.
+// The shadow ray passes thin sheets and transparency; a sample that crosses more than maxCrossings
+// of them has more scattering vertices than max_bounces allows.
 vec3 directLight(vec3 p, vec3 ng, vec3 n, vec3 albedo, bool glossy, MaterialGpu m, vec3 t, vec3 b, vec3 wi,
-                 inout Rng rng) {
+                 uint maxCrossings, inout Rng rng) {
     LightSample ls;
     if (!sampleLight(p, rng, ls)) return vec3(0.0);
     float cosS = dot(n, ls.wi);
@@ -68,7 +70,9 @@ vec3 directLight(vec3 p, vec3 ng, vec3 n, vec3 albedo, bool glossy, MaterialGpu 
     if (!any(greaterThan(value, vec3(0.0)))) return vec3(0.0);
     vec3 o = offsetRayOrigin(p, ng, ls.wi);
     float tMax = ls.dist < kInfinity ? max(ls.dist - length(o - p), 0.0) : kInfinity;
-    if (traceAny(o, ls.wi, tMax)) return vec3(0.0);
+    uint crossings;
+    value *= surfaceShadow(o, ls.wi, tMax, rng, crossings);
+    if (crossings > maxCrossings) return vec3(0.0);
     if (kBsdfFamilies != 0u && glossy) return value;
     return albedo * kInvPi * value;
 }
@@ -136,16 +140,26 @@ GatherVertex traceCameraChain(vec3 origin, vec3 dir, inout Rng rng) {
         MaterialGpu m = sceneMaterial(pr.material);
         if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
         uint index = pr.material;
-        // mixed: one component (transparency is path tracing's: the loader refuses it here)
-        if (kBsdfFamilies != 0u) resolveComposite(m, index, throughput, pr, hit.prim, hit.bary, p, rng);
+        // mixed: one component; transparency: its base, or straight on (pass)
+        bool pass = kBsdfFamilies != 0u && resolveComposite(m, index, throughput, pr, hit.prim, hit.bary, p, rng);
         vec3 ns = shadingNormal(hit.prim, hit.bary, ng);  // ng unless the triangle is smooth-shaded
         bool front = dot(dir, ns) < 0.0;
         vec3 n = front ? ns : -ns;  // faces the camera path
+        uint maxCrossings = kPhotonMaxBounces - 1u - v;  // for a light sample at this vertex
+        bool sheet = !pass && (kBsdfFamilies & kFamilyThinSheet) != 0u && m.type == kBsdfThinSheet;
+        if (pass || sheet) {
+            // straight on, or a thin sheet's specular reflection or straight pass (thinSheetScatter)
+            vec3 weight = vec3(1.0);
+            if (sheet && thinSheetScatter(m, abs(dot(dir, ng)), rngNext(rng), weight)) dir = reflect(dir, n);
+            throughput *= weight;
+            origin = offsetRayOrigin(p, ng, dir);
+            continue;
+        }
 
         if (m.type == kBsdfLambert) {
             if (!front && !kTwoSided) break;
             if (kNextEvent && kLightCount > 0u)
-                gv.light += throughput * directLight(p, ng, n, m.albedo, false, m, n, n, n, rng);
+                gv.light += throughput * directLight(p, ng, n, m.albedo, false, m, n, n, n, maxCrossings, rng);
             gv.p = p;
             gv.n = n;
             gv.f = throughput * m.albedo * kInvPi;
@@ -167,7 +181,8 @@ GatherVertex traceCameraChain(vec3 origin, vec3 dir, inout Rng rng) {
                 continue;
             }
             throughput /= 1.0 - pDirac;
-            if (kNextEvent && kLightCount > 0u) gv.light += throughput * directLight(p, ng, n, m.albedo, true, m, t, b, wi, rng);
+            if (kNextEvent && kLightCount > 0u)
+                gv.light += throughput * directLight(p, ng, n, m.albedo, true, m, t, b, wi, maxCrossings, rng);
             gv.p = p;
             gv.n = n;
             gv.f = throughput;

@@ -264,39 +264,9 @@ uint mediumAcross(uint prim, vec3 ng, vec3 dir, uint current) {
     return dot(dir, ng) < 0.0 ? (packed & 0xffffu) : (packed >> 16u);
 }
 
-vec3 offsetRayOrigin(vec3 p, vec3 ng, vec3 dir);  // path_tracer.glsl
-
-vec3 primNormalAt(Prim pr, vec3 p) {
-    if (kHasSpheres && pr.type == kPrimSphere) return normalize(p - pr.p0);
-    return pr.n;
-}
-
 // Transmittance along a shadow ray from o to o + tMax d: forward surfaces let it through (each
 // counts as a bounce, as in Tungsten), anything else blocks it; every medium segment is estimated.
-// Thin sheets and transparency let shadow rays through (Tungsten's generalizedShadowRay
-// multiplies by every surface's forward transmittance): the kFamilyPassThrough families.
-const bool kHasPassThrough = (kBsdfFamilies & kFamilyPassThrough) != 0u;
-
-// Forward transmittance of material m for a ray at |cos| cosI (shared/bsdf.h; Tungsten's
-// eval of the forward lobe): a thin sheet's T, 1 - alpha for transparency, 1 for a forward
-// boundary, 0 for the rest; a mixed material picks one component by its ratio (an unbiased
-// estimate of the ratio-weighted sum) and weighs it by its albedo.
-vec3 passThroughTransmittance(MaterialGpu m, float cosI, inout Rng rng) {
-    vec3 w = vec3(1.0);
-    for (uint level = 0u; level < kMaxMaterialNesting && m.type == kBsdfMixed; ++level) {
-        w *= m.albedo;
-        m = sceneMaterial(mixedComponent(m, rngNext(rng)));
-    }
-    if (m.type == kBsdfTransparency) return w * (1.0 - m.alpha);
-    if (m.type == kBsdfForward) return w;
-    if (m.type == kBsdfThinSheet) {
-        vec3 t;
-        thinSheetReflectance(m, cosI, t);
-        return w * t;
-    }
-    return vec3(0.0);
-}
-
+// Thin sheets and transparency let shadow rays through (scene_common.glsl shadowPass).
 vec3 shadowTransmittance(vec3 o, vec3 d, float tMax, uint medium, bool startOnSurface, inout Rng rng,
                          out uint crossings) {
     crossings = 0u;
@@ -313,18 +283,11 @@ vec3 shadowTransmittance(vec3 o, vec3 d, float tMax, uint medium, bool startOnSu
             tr *= mediumTransmittance(medium - 1u, o, d, end, startOnSurface, true, rng);
         }
         if (!found) return tr;
-        Prim pr = BVH_PRIM(hit.prim);
-        vec3 p = o + d * hit.t;
-        vec3 ng = primNormalAt(pr, p);
-        if (kHasPassThrough) {
-            tr *= passThroughTransmittance(sceneMaterial(pr.material), abs(dot(d, ng)), rng);
-        } else if (sceneMaterial(pr.material).type != kBsdfForward) {
-            return vec3(0.0);
-        }
+        if (!kHasPassThrough && sceneMaterial(BVH_PRIM(hit.prim).material).type != kBsdfForward) return vec3(0.0);
+        vec3 ng;
+        tr *= shadowPass(hit, o, d, tMax, rng, ng);
         if (tr == vec3(0.0)) return tr;
         if (kHasMedia) medium = mediumAcross(hit.prim, ng, d, medium);
-        o = offsetRayOrigin(p, ng, d);
-        if (tMax < kInfinity) tMax = max(tMax - hit.t, 0.0);
         startOnSurface = true;
         ++crossings;
     }

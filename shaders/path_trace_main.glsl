@@ -79,6 +79,7 @@ layout(std430, binding = kBindingEnvironment) readonly buffer EnvironmentBuffer 
 layout(push_constant) uniform Push { PathTracePush pc; };
 
 #include "scene_geometry.glsl"
+#include "scene_common.glsl"
 #include "medium.glsl"
 #include "path_tracer.glsl"
 

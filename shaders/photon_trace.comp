@@ -1,8 +1,8 @@
 // photon_trace: one thread per photon path. A light is picked in proportion to its power, a
 // photon leaves it with power Phi / (p(light) N), follows mirror and dielectric bounces, and is
-// stored at every hit whose material has a non-delta lobe (Lambert and the glossy materials; from
-// the second vertex on when direct light comes from next-event estimation), then continues by
-// sampling the BSDF with Russian roulette on its throughput.
+// stored at every hit whose material has a non-delta lobe (Lambert and the glossy materials; when
+// direct light comes from next-event estimation, only after the photon first scattered), then
+// continues by sampling the BSDF with Russian roulette on its throughput.
 // A photon keeps its vertex index v (1: the first surface the light reaches, specular ones counted).
 // With Tungsten's max_bounces M a full path joins a photon at v to a camera chain of c vertices
 // (the gather vertex counted in both) and has v + c - 1 scattering vertices, at most M - 1 (the
@@ -126,6 +126,9 @@ void tracePhotonPath() {
     vec3 origin, dir, power;
     emitPhoton(path, rng, origin, dir, power);
     if (!any(greaterThan(power, vec3(0.0)))) return;
+    // Direct light until the photon scatters: straight passes (transparency, a thin sheet's
+    // transmission) keep it direct, since next-event shadow rays pass those surfaces too.
+    bool direct = true;
     for (uint v = 1u; v + 1u <= kPhotonMaxBounces; ++v) {
         Hit hit;
         if (!traceClosest(origin, dir, kInfinity, hit)) return;
@@ -140,16 +143,26 @@ void tracePhotonPath() {
         // ---- Store where the material has a non-delta lobe ----
         // (A mixture's photon is stored before it picks the component it scatters by: the incident
         // flux does not depend on that choice, and a gather there draws its own component.)
-        bool nonDelta = m.type == kBsdfLambert || (kBsdfFamilies != 0u && (isGlossyBsdf(m.type) || m.type == kBsdfMixed));
-        if (nonDelta && (front || kTwoSided) && (!kNextEvent || v > 1u)) storePhoton(map, photons, capacity, p, -dir, power, v);
+        bool nonDelta = m.type == kBsdfLambert ||
+                        (kBsdfFamilies != 0u && (isGlossyBsdf(m.type) || m.type == kBsdfMixed || m.type == kBsdfTransparency));
+        if (nonDelta && (front || kTwoSided) && (!kNextEvent || !direct)) storePhoton(map, photons, capacity, p, -dir, power, v);
 
         // ---- Scatter ----
         if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
         vec3 scale = vec3(1.0);
         uint index = pr.material;
-        // mixed: one component (transparency is path tracing's: the loader refuses it here)
-        if (kBsdfFamilies != 0u) resolveComposite(m, index, scale, pr, hit.prim, hit.bary, p, rng);
-        if (m.type == kBsdfLambert) {
+        // mixed: one component; transparency: its base, or straight on (pass)
+        bool pass = kBsdfFamilies != 0u && resolveComposite(m, index, scale, pr, hit.prim, hit.bary, p, rng);
+        bool straight = pass;
+        if (pass) {
+            // straight on: a bounce with the direction unchanged
+        } else if ((kBsdfFamilies & kFamilyThinSheet) != 0u && m.type == kBsdfThinSheet) {
+            // specular reflection or straight on (shared/bsdf.h thinSheetScatter)
+            vec3 weight;
+            if (thinSheetScatter(m, abs(dot(dir, ng)), rngNext(rng), weight)) dir = reflect(dir, n);
+            else straight = true;
+            scale *= weight;
+        } else if (m.type == kBsdfLambert) {
             if (!front && !kTwoSided) return;
             dir = sampleCosineHemisphere(n, rngNext(rng), rngNext(rng));
             if (dot(dir, n) <= 0.0) return;
@@ -181,6 +194,7 @@ void tracePhotonPath() {
         if (q < 1.0 && rngNext(rng) >= q) return;
         power *= scale / q;
         origin = offsetRayOrigin(p, ng, dir);
+        direct = direct && straight;
     }
 }
 

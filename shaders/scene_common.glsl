@@ -2,6 +2,8 @@
 // scene buffers (textureData[] among them), intersect.h and the specialisation constants
 // kRayEpsilon, kLightCount, kHasSpheres, kHasDisks, kHasTextures and kBsdfFamilies). The
 // CPU-tested parts live in shared/ (bsdf.h, emitter.h, texture.h).
+#ifndef TELESCOPE_SCENE_COMMON_GLSL
+#define TELESCOPE_SCENE_COMMON_GLSL
 #include "shared/bsdf.h"
 #include "shared/emitter.h"
 #include "shared/texture.h"
@@ -169,3 +171,65 @@ bool sampleLight(vec3 p, inout Rng rng, out LightSample ls) {
     }
     return true;
 }
+
+// ---- Shadow rays past pass-through surfaces ----
+// Thin sheets and transparency let shadow rays through (Tungsten's generalizedShadowRay
+// multiplies by every surface's forward transmittance): the kFamilyPassThrough families.
+const bool kHasPassThrough = (kBsdfFamilies & kFamilyPassThrough) != 0u;
+
+vec3 primNormalAt(Prim pr, vec3 p) {
+    if (kHasSpheres && pr.type == kPrimSphere) return normalize(p - pr.p0);
+    return pr.n;
+}
+
+// Forward transmittance of material m for a ray at |cos| cosI (shared/bsdf.h; Tungsten's
+// eval of the forward lobe): a thin sheet's T, 1 - alpha for transparency, 1 for a forward
+// boundary, 0 for the rest; a mixed material picks one component by its ratio (an unbiased
+// estimate of the ratio-weighted sum) and weighs it by its albedo.
+vec3 passThroughTransmittance(MaterialGpu m, float cosI, inout Rng rng) {
+    vec3 w = vec3(1.0);
+    for (uint level = 0u; level < kMaxMaterialNesting && m.type == kBsdfMixed; ++level) {
+        w *= m.albedo;
+        m = sceneMaterial(mixedComponent(m, rngNext(rng)));
+    }
+    if (m.type == kBsdfTransparency) return w * (1.0 - m.alpha);
+    if (m.type == kBsdfForward) return w;
+    if (m.type == kBsdfThinSheet) {
+        vec3 t;
+        thinSheetReflectance(m, cosI, t);
+        return w * t;
+    }
+    return vec3(0.0);
+}
+
+// A shadow ray from o along d (up to tMax) that met a surface at hit: the transmittance of
+// passing it, with o moved past it, tMax shortened and the surface's geometric normal in ng.
+vec3 shadowPass(Hit hit, inout vec3 o, vec3 d, inout float tMax, inout Rng rng, out vec3 ng) {
+    Prim pr = BVH_PRIM(hit.prim);
+    vec3 p = o + d * hit.t;
+    ng = primNormalAt(pr, p);
+    vec3 tr = passThroughTransmittance(sceneMaterial(pr.material), abs(dot(d, ng)), rng);
+    o = offsetRayOrigin(p, ng, d);
+    if (tMax < kInfinity) tMax = max(tMax - hit.t, 0.0);
+    return tr;
+}
+
+// Transmittance of a shadow ray in a scene without media (the photon passes): 1 or 0 by one
+// any-hit query, or with pass-through surfaces the product over the surfaces it crosses (counted
+// in crossings: each is a bounce, as in the path tracer's shadowTransmittance).
+vec3 surfaceShadow(vec3 o, vec3 d, float tMax, inout Rng rng, out uint crossings) {
+    crossings = 0u;
+    if (!kHasPassThrough) return traceAny(o, d, tMax) ? vec3(0.0) : vec3(1.0);
+    vec3 tr = vec3(1.0);
+    for (uint guard = 0u; guard < 256u; ++guard) {
+        Hit hit;
+        if (!traceClosest(o, d, tMax, hit)) return tr;
+        vec3 ng;
+        tr *= shadowPass(hit, o, d, tMax, rng, ng);
+        if (tr == vec3(0.0)) return tr;
+        ++crossings;
+    }
+    return vec3(0.0);
+}
+
+#endif

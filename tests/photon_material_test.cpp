@@ -94,3 +94,33 @@ TEST_F(PhotonMaterials, NearestPhotonGathersOnGlossyFloorsAgreeWithThePathTracer
     }
     EXPECT_GE(controlOff, 2) << "the control must be off by more than the tolerance on at least two floors";
 }
+
+TEST_F(PhotonMaterials, UnbiasedBlocksThroughThinSheetsAndTransparencyMatchThePathTracer) {
+    // scenes/thin-photon-room.json: the room with a tilted thin sheet (absorbing, ior 1.5) over the
+    // left half of the floor and a green leaf (transparency, alpha 0.6) over the right half, between
+    // the light and the floor and between the camera and the floor. Photons and camera chains pass
+    // them or reflect off the sheet; next-event shadow rays pass them with their transmittance, so
+    // a photon stays direct light (not stored) until it first scatters otherwise.
+    // Controls, the path tracer's renders of what a wrong photon pass would converge to: the
+    // leaf's alpha taken as its pass probability (alpha 0.4), and the sheet's absorption ignored
+    // (sigma_a 0).
+    const auto scene = [](std::vector<SceneOverride> more) {
+        more.push_back({"camera.resolution", "[16, 16]"});
+        return loadTestScene("scenes/thin-photon-room.json", more);
+    };
+    const auto reference = [&](std::vector<SceneOverride> more) {
+        more.push_back({"integrator", R"({"type": "path_tracer", "max_bounces": 16})"});
+        return blockMeans(renderFilm(scene(more), 2048, 19), kBlock);
+    };
+    const std::vector<std::vector<glm::dvec3>> batches = regionBatchMeans(
+        scene({{"integrator", std::string(kUnbiased) + "}"}}), kBlock, 16, 4, 7);
+    const BatchVerdict right = compareBatchMeans(batches, reference({}), 3, kAlpha, "photon map");
+    EXPECT_EQ(right.failures, 0u);
+    // bsdfs[6] is the sheet, bsdfs[7] the leaf.
+    const BatchVerdict alpha = compareBatchMeans(batches, reference({{"bsdfs[7].alpha", "0.4"}}), 3, kAlpha,
+                                                 "alpha as the pass probability (control)");
+    EXPECT_GE(alpha.failures, 6u) << "the control must fail under the leaf";
+    const BatchVerdict clear = compareBatchMeans(batches, reference({{"bsdfs[6].sigma_a", "[0, 0, 0]"}}), 3, kAlpha,
+                                                 "sheet absorption ignored (control)");
+    EXPECT_GE(clear.failures, 6u) << "the control must fail under the sheet";
+}

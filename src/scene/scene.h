@@ -71,14 +71,9 @@ struct Material {
     float alpha = 1.0f;
 };
 
-// Whether the photon tracer and gather implement a material (the others are path tracing's: the
-// rough dielectric's transmission is not reciprocal, and thin sheets and transparency need shadow
-// rays that pass them).
-inline bool photonsSupport(BsdfType t) {
-    return t == BsdfType::Lambert || t == BsdfType::Mirror || t == BsdfType::Dielectric || t == BsdfType::Null ||
-           t == BsdfType::Forward || t == BsdfType::Conductor || t == BsdfType::RoughConductor ||
-           t == BsdfType::Plastic || t == BsdfType::RoughPlastic || t == BsdfType::OrenNayar || t == BsdfType::Mixed;
-}
+// Whether the photon tracer and gather implement a material (the rough dielectric is path
+// tracing's: its transmission is not reciprocal, so a photon cannot sample it as a camera path does).
+inline bool photonsSupport(BsdfType t) { return t != BsdfType::RoughDielectric; }
 
 enum class GeometryType : uint32_t {
     Triangle = shader::kPrimTriangle, Sphere = shader::kPrimSphere, Disk = shader::kPrimDisk, Quad = shader::kPrimQuad
