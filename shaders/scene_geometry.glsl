@@ -1,12 +1,18 @@
 // The scene's geometry for the ray queries of shared/intersect.h (GLSL only; after the storage
 // buffers prims[] and nodes[]): BVH nodes and primitives read from uniform buffers when they fit
 // (kSpecSceneInUniforms: lavapipe loads from a uniform buffer about 1.8x as fast as from a storage
-// buffer), and tiny scenes tested primitive by primitive without the BVH (kSpecBruteForcePrims).
+// buffer), else from uniform texel buffers when the device's texel limit allows (kSpecSceneTexels:
+// lavapipe fetches the 8 lanes' texels with vector loads, where a divergent storage-buffer load
+// loops over the lanes once per component), else from the storage buffers; tiny scenes are tested
+// primitive by primitive without the BVH (kSpecBruteForcePrims).
 // Included by path_trace_main.glsl and photon_scene.glsl.
 
 layout(constant_id = kSpecSceneInUniforms) const bool kSceneInUniforms = false;
 layout(std140, binding = kBindingBvhUniform) uniform BvhUniform { BvhNode uniformNodes[kMaxUniformNodes]; };
 layout(std140, binding = kBindingPrimsUniform) uniform PrimUniform { Prim uniformPrims[kMaxUniformPrims]; };
+layout(constant_id = kSpecSceneTexels) const bool kSceneTexels = false;
+layout(binding = kBindingBvhTexels) uniform usamplerBuffer bvhTexels;
+layout(binding = kBindingPrimsTexels) uniform usamplerBuffer primTexels;
 
 // Lavapipe (Mesa 22.3) inlines uniform-buffer values read at constant offsets that decide a
 // branch: each time such a pipeline is bound it compiles a new shader with the values folded in,
@@ -37,10 +43,24 @@ uint uniformIndex(uint i) {
 // (Functions, not ?: : the uniform and storage structs are distinct SPIR-V types.)
 BvhNode sceneNode(uint i) {
     if (kSceneInUniforms) return uniformNodes[uniformIndex(i)];
+    if (kSceneTexels) {
+        uvec4 a = texelFetch(bvhTexels, int(2u * i));
+        uvec4 b = texelFetch(bvhTexels, int(2u * i + 1u));
+        return BvhNode(uintBitsToFloat(a.xyz), a.w, uintBitsToFloat(b.xyz), b.w);
+    }
     return nodes[i];
 }
 Prim scenePrim(uint i) {
     if (kSceneInUniforms) return uniformPrims[uniformIndex(i)];
+    if (kSceneTexels) {
+        // Texels a caller does not use (the normal when only intersecting) are never fetched.
+        uvec4 a = texelFetch(primTexels, int(4u * i));
+        uvec4 b = texelFetch(primTexels, int(4u * i + 1u));
+        uvec4 c = texelFetch(primTexels, int(4u * i + 2u));
+        uvec4 d = texelFetch(primTexels, int(4u * i + 3u));
+        return Prim(uintBitsToFloat(a.xyz), a.w, uintBitsToFloat(b.xyz), b.w, uintBitsToFloat(c.xyz), int(c.w),
+                    uintBitsToFloat(d.xyz), uintBitsToFloat(d.w));
+    }
     return prims[i];
 }
 #define BVH_NODE(i) sceneNode(i)

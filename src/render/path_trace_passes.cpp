@@ -141,7 +141,8 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     feature("inhomogeneous media", f.inhomogeneous, "a medium's density varies: transmittance estimated",
             f.media ? "every medium homogeneous: comb estimators are exact, their code folded out" : "no participating media");
     feature("uniform scene", f.fitsUniforms, "BVH nodes and primitives read from uniform buffers (faster loads)",
-            "more than 2048 BVH nodes or 1024 primitives: read from storage buffers");
+            "more than 2048 BVH nodes or 1024 primitives: read from uniform texel buffers (from storage buffers "
+            "on devices whose texel limit the scene exceeds)");
     feature("uniform tables", f.tablesFitUniforms, "materials, lights and media read from uniform buffers (faster loads)",
             fmt::format("more than {} materials, {} lights or {} media: read from storage buffers",
                         shader::kMaxUniformMaterials, shader::kMaxUniformLights, shader::kMaxUniformMedia));
@@ -178,6 +179,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},
         {kSpecTestPmfWeight, gpu::specFloat(in.debias.testPmfWeight)},
         {kSpecSceneInUniforms, f.fitsUniforms},
+        {kSpecSceneTexels, !f.fitsUniforms},  // off on devices whose texel limit the scene exceeds
         {kSpecBruteForcePrims, f.bruteForcePrims},
         {kSpecTablesInUniforms, f.tablesFitUniforms},
         {kSpecBsdfFamilies, f.bsdfFamilies},
@@ -227,9 +229,10 @@ public:
     PathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan, const RenderBuffers& b,
                     uint32_t seed)
         : pipeline_(context, plan.pathTraceShader, shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
-                    deviceSceneSpec(context, plan.pathTraceSpec), kPathTraceUniformBindings) {
+                    deviceSceneSpec(context, plan.pathTraceSpec, b), kPathTraceUniformBindings, kSceneTexelBindings) {
         pipeline_.bindBuffers({b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims,
-                               b.textures, b.environment, b.materials, b.lights, b.media, b.shadingNormals});
+                               b.textures, b.environment, b.materials, b.lights, b.media, b.shadingNormals,
+                               b.nodeTexels(context), b.primTexels(context)});
         for (const auto& s : plan.pathTraceSpec)
             if (s.id == shader::kSpecLoopBudget && s.value != 0) loopBudget_ = deviceLoopBudget(context);
         const Camera& cam = scene.camera;

@@ -143,8 +143,10 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
             "no infinite_sphere or infinite_sphere_cap");
     feature("next event", nee, "direct_lighting = next_event", "direct_lighting = photons: all light from photons");
     feature("debias", unbiased(in), "debias block: blocks of passes, K_r_b + correction", "no debias block: biased K_r");
-    feature("uniform scene", f.fitsUniforms, "photon_trace reads BVH nodes and primitives from uniform buffers",
-            "more than 2048 BVH nodes or 1024 primitives: read from storage buffers");
+    feature("uniform scene", f.fitsUniforms,
+            "photon_trace reads BVH nodes and primitives from uniform buffers, the gather from uniform texel buffers",
+            "more than 2048 BVH nodes or 1024 primitives: both read them from uniform texel buffers (from storage "
+            "buffers on devices whose texel limit the scene exceeds)");
     feature("brute-force rays", f.bruteForcePrims > 0u,
             fmt::format("photon_trace tests the {} primitives in turn, no BVH walk", f.bruteForcePrims),
             fmt::format("BVH traversal over {} primitives (brute force takes at most {}, in uniform buffers)",
@@ -170,6 +172,7 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         {kSpecPhotonTestCosine, ph.testGatherCosine},
         {kSpecPhotonMaxBounces, in.maxBounces},
         {kSpecSceneInUniforms, f.fitsUniforms},
+        {kSpecSceneTexels, 1u},  // where the uniform scene is not read; off beyond the device's texel limit
         {kSpecBruteForcePrims, f.bruteForcePrims},
         {kSpecSmoothNormals, f.smoothNormals},
         {kSpecBsdfFamilies, f.bsdfFamilies},
@@ -191,10 +194,10 @@ public:
           camera_(scene.camera),
           seed_(seed),
           map_(context, scene.integrator.photon.photonCount),
-          gatherSpec_(deviceSceneSpec(context, plan.photonSpec, false)),
+          gatherSpec_(deviceSceneSpec(context, plan.photonSpec, b, false)),
           pipelines_(gpu::createComputePipelines(
               context, {{"photon_trace", shader::kSceneBindingCount, uint32_t(sizeof(shader::PhotonTracePush)),
-                         deviceSceneSpec(context, plan.photonSpec), kSceneUniformBindings},
+                         deviceSceneSpec(context, plan.photonSpec, b), kSceneUniformBindings, kSceneTexelBindings},
                         gatherDesc(map_.texelsFit())})),
           trace_(*pipelines_[0]),
           blockBuffer_(context,
@@ -205,7 +208,8 @@ public:
         // Bindings 4-6 and 11-13 (media and uniform tables in the path tracer) are declared by
         // neither shader: any buffer will do (the gather binds its texels at 4).
         scene_ = {b.prims,    b.nodes,  b.materials,   b.lights, b.lights, b.lights, b.lights,        b.nodes,
-                  b.prims,    b.textures, b.environment, b.lights, b.lights, b.lights, b.shadingNormals};
+                  b.prims,    b.textures, b.environment, b.lights, b.lights, b.lights, b.shadingNormals,
+                  b.nodeTexels(context), b.primTexels(context)};
         trace_.bindBuffers(scene_);
         gatherTexels_ = map_.texelsFit();  // as the gather pipeline was created
         bindGather();
@@ -378,7 +382,7 @@ private:
         std::vector<gpu::SpecConstant> spec = gatherSpec_;
         spec.push_back({shader::kSpecSortedTexels, texels});
         return {"gather", shader::kGatherBindingCount, uint32_t(sizeof(shader::GatherPush)), spec,
-                kSceneUniformBindings, 1u << shader::kBindingSortedTexels};
+                kSceneUniformBindings, kSceneTexelBindings | (1u << shader::kBindingSortedTexels)};
     }
 
     // The scene, and the photon map's sorted photons as texels. A map grown beyond the texel

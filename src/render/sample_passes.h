@@ -47,29 +47,6 @@ void setPushCamera(Push& push, const Camera& cam) {
 // overrides it (tests force tiny budgets with it; 0 turns the budget off).
 uint32_t deviceLoopBudget(const gpu::Context& context);
 
-// A plan's specialisation constants for this device: without the uniform scene (and so without
-// brute-force rays, which read it) where uniform buffers are smaller than kUniformSceneBytes, or
-// where the caller does not want it (uniformScene false); without the uniform tables where uniform
-// buffers are smaller.
-inline std::vector<gpu::SpecConstant> deviceSceneSpec(const gpu::Context& context, std::vector<gpu::SpecConstant> spec,
-                                                      bool uniformScene = true) {
-    const bool small = context.properties().limits.maxUniformBufferRange < shader::kUniformSceneBytes;
-    for (auto& s : spec) {
-        if ((!uniformScene || small) && (s.id == shader::kSpecSceneInUniforms || s.id == shader::kSpecBruteForcePrims))
-            s.value = 0;
-        if (small && s.id == shader::kSpecTablesInUniforms) s.value = 0;
-        if (s.id == shader::kSpecLoopBudget && s.value != 0) s.value = deviceLoopBudget(context);
-    }
-    return spec;
-}
-
-// The scene's uniform bindings (kBindingBvhUniform, kBindingPrimsUniform) of path_trace, photon_trace and gather.
-constexpr uint32_t kSceneUniformBindings = (1u << shader::kBindingBvhUniform) | (1u << shader::kBindingPrimsUniform);
-// path_trace's: those, and the materials, lights and media (kSpecTablesInUniforms).
-constexpr uint32_t kPathTraceUniformBindings = kSceneUniformBindings | (1u << shader::kBindingMaterialsUniform) |
-                                               (1u << shader::kBindingLightsUniform) |
-                                               (1u << shader::kBindingMediaUniform);
-
 // Buffers the integrators read: the scene (bindings 0..3), the accumulation (by address) and the
 // media (path tracer only).
 struct RenderBuffers {
@@ -85,7 +62,42 @@ struct RenderBuffers {
     const gpu::Buffer* textures = nullptr;  // binding 9 of path_trace (shared/texture.h)
     const gpu::Buffer* environment = nullptr;  // binding kBindingEnvironment of path_trace
     const gpu::Buffer* shadingNormals = nullptr;  // binding kBindingShadingNormals of every scene pass
+
+    // Whether the BVH nodes and primitives fit the device's texel buffers (kSpecSceneTexels).
+    bool sceneTexelsFit(const gpu::Context& context) const {
+        return gpu::Buffer::texelViewFits(context, nodes->size()) && gpu::Buffer::texelViewFits(context, prims->size());
+    }
+    // What the texel bindings (kBindingBvhTexels, kBindingPrimsTexels) hold: the nodes and
+    // primitives, or where they do not fit (and no shader reads them) the small light table.
+    const gpu::Buffer* nodeTexels(const gpu::Context& context) const { return sceneTexelsFit(context) ? nodes : lights; }
+    const gpu::Buffer* primTexels(const gpu::Context& context) const { return sceneTexelsFit(context) ? prims : lights; }
 };
+
+// A plan's specialisation constants for this device: without the uniform scene (and so without
+// brute-force rays, which read it) where uniform buffers are smaller than kUniformSceneBytes, or
+// where the caller does not want it (uniformScene false); without the scene's texels where they
+// exceed the device's texel limit; without the uniform tables where uniform buffers are smaller.
+inline std::vector<gpu::SpecConstant> deviceSceneSpec(const gpu::Context& context, std::vector<gpu::SpecConstant> spec,
+                                                      const RenderBuffers& b, bool uniformScene = true) {
+    const bool small = context.properties().limits.maxUniformBufferRange < shader::kUniformSceneBytes;
+    for (auto& s : spec) {
+        if ((!uniformScene || small) && (s.id == shader::kSpecSceneInUniforms || s.id == shader::kSpecBruteForcePrims))
+            s.value = 0;
+        if (s.id == shader::kSpecSceneTexels && !b.sceneTexelsFit(context)) s.value = 0;
+        if (small && s.id == shader::kSpecTablesInUniforms) s.value = 0;
+        if (s.id == shader::kSpecLoopBudget && s.value != 0) s.value = deviceLoopBudget(context);
+    }
+    return spec;
+}
+
+// The scene's uniform bindings (kBindingBvhUniform, kBindingPrimsUniform) of path_trace, photon_trace and gather.
+constexpr uint32_t kSceneUniformBindings = (1u << shader::kBindingBvhUniform) | (1u << shader::kBindingPrimsUniform);
+// Their texel bindings (kBindingBvhTexels, kBindingPrimsTexels).
+constexpr uint32_t kSceneTexelBindings = (1u << shader::kBindingBvhTexels) | (1u << shader::kBindingPrimsTexels);
+// path_trace's: those, and the materials, lights and media (kSpecTablesInUniforms).
+constexpr uint32_t kPathTraceUniformBindings = kSceneUniformBindings | (1u << shader::kBindingMaterialsUniform) |
+                                               (1u << shader::kBindingLightsUniform) |
+                                               (1u << shader::kBindingMediaUniform);
 
 // Loop-budget counters of a render (shared/gpu_types.h kLoopStat*).
 struct LoopStats {
