@@ -32,12 +32,24 @@ layout(std430, binding = kBindingTextures) readonly buffer TextureBuffer { vec4 
 layout(std430, binding = kBindingEnvironment) readonly buffer EnvironmentBuffer { float envData[]; };
 #define ENV_DATA(i) envData[i]
 #include "shared/environment_map.h"
-// (The path tracer may read these tables from uniform buffers: path_trace_main.glsl.)
-MaterialGpu sceneMaterial(uint i) { return materials[i]; }
-LightGpu sceneLight(uint i) { return lights[i]; }
 
 #define SCENE_UNIFORM_INDEX_HIDDEN  // scene_geometry.glsl: no shader compiled again per pass
 #include "scene_geometry.glsl"
+
+// The materials and lights as uniform buffers when they fit (kSpecTablesInUniforms, as in the
+// path tracer), with the hidden zero of scene_geometry.glsl in the index: a light read at a
+// constant index (one light; the environment light) must not be folded into the shader.
+layout(constant_id = kSpecTablesInUniforms) const bool kTablesInUniforms = false;
+layout(std140, binding = kBindingMaterialsUniform) uniform MaterialUniform { MaterialGpu uniformMaterials[kMaxUniformMaterials]; };
+layout(std140, binding = kBindingLightsUniform) uniform LightUniform { LightGpu uniformLights[kMaxUniformLights]; };
+MaterialGpu sceneMaterial(uint i) {
+    if (kTablesInUniforms) return uniformMaterials[uniformIndex(i)];
+    return materials[i];
+}
+LightGpu sceneLight(uint i) {
+    if (kTablesInUniforms) return uniformLights[uniformIndex(i)];
+    return lights[i];
+}
 
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer PhotonMapRef { PhotonMapHeader h; };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer PhotonArrayRef { Photon p[]; };

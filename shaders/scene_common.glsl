@@ -11,6 +11,11 @@
 // ---- Shading normals ----
 layout(constant_id = kSpecSmoothNormals) const bool kSmoothNormals = false;
 layout(std430, binding = kBindingShadingNormals) readonly buffer ShadingNormalBuffer { vec4 shadingNormals[]; };
+layout(binding = kBindingShadingNormalTexels) uniform usamplerBuffer shadingNormalTexels;
+vec4 shadingNormalData(uint i) {
+    if (kSceneTexels) return uintBitsToFloat(texelFetch(shadingNormalTexels, int(i)));
+    return shadingNormals[i];
+}
 
 // The normal the BSDF sees at a hit of prim slot `prim` (bary: the weights of p1 and p2): a
 // smooth-shaded triangle's vertex normals interpolated and normalised (Tungsten's
@@ -19,10 +24,10 @@ layout(std430, binding = kBindingShadingNormals) readonly buffer ShadingNormalBu
 // emission keep ng.
 vec3 shadingNormal(uint prim, vec2 bary, vec3 ng) {
     if (!kSmoothNormals) return ng;
-    vec4 a = shadingNormals[3u * prim];
+    vec4 a = shadingNormalData(3u * prim);
     if (a.w == 0.0) return ng;
-    vec3 n = (1.0 - bary.x - bary.y) * a.xyz + bary.x * shadingNormals[3u * prim + 1u].xyz +
-             bary.y * shadingNormals[3u * prim + 2u].xyz;
+    vec3 n = (1.0 - bary.x - bary.y) * a.xyz + bary.x * shadingNormalData(3u * prim + 1u).xyz +
+             bary.y * shadingNormalData(3u * prim + 2u).xyz;
     float l = length(n);
     return l > 0.0 ? n / l : ng;
 }

@@ -134,17 +134,19 @@ CONST uint kBindingShadingNormals = 14u;
 // material; p2, light; n, area) once more, as uniform texel buffers of 4 x uint32 texels: read from
 // there when they do not fit the uniform bindings but fit maxTexelBufferElements
 // (kSpecSceneTexels). Lavapipe fetches a texel for all 8 lanes of a SIMD group with vector loads,
-// where a divergent storage-buffer load loops over the lanes once per component.
+// where a divergent storage-buffer load loops over the lanes once per component. The shading
+// normals (kBindingShadingNormals) likewise, 3 texels per prim slot.
 CONST uint kBindingBvhTexels = 15u;
 CONST uint kBindingPrimsTexels = 16u;
-CONST uint kPathTraceBindingCount = 17u;
+CONST uint kBindingShadingNormalTexels = 17u;
+CONST uint kPathTraceBindingCount = 18u;
 CONST uint kUniformSceneBytes = 65536u;  // maxUniformBufferRange on lavapipe; the Vulkan minimum is 16384
 CONST uint kMaxUniformNodes = 2048u;     // kUniformSceneBytes / sizeof(BvhNode)
 CONST uint kMaxUniformPrims = 1024u;     // kUniformSceneBytes / sizeof(Prim)
 CONST uint kMaxUniformMaterials = 682u;  // kUniformSceneBytes / sizeof(MaterialGpu), rounded down
 CONST uint kMaxUniformLights = 1365u;    // ... / sizeof(LightGpu)
 CONST uint kMaxUniformMedia = 273u;      // ... / sizeof(MediumGpu)
-CONST uint kSceneBindingCount = 17u;     // photon_trace and gather: the scene only (4-6 and 10-13 unused; the gather's texels at 4)
+CONST uint kSceneBindingCount = 18u;     // photon_trace and gather: the scene only (4-6 and 10-13 unused; the gather's texels at 4)
 
 // Specialisation constant ids: features a scene lacks are folded away by the compiler.
 CONST uint kSpecMaxBounces = 0u;
@@ -169,7 +171,7 @@ CONST uint kSpecPilot = 16u;             // pmf pilot: every sample takes the le
 CONST uint kSpecLevelSchedule = 17u;     // kLevelSchedule*: how per-sample levels are laid out on lanes
 CONST uint kSpecTestPmfWeight = 18u;     // test-only: scales every 1 / p(j) (debias.test_pmf_weight)
 CONST uint kSpecSceneInUniforms = 19u;   // BVH nodes and primitives read from the uniform bindings
-CONST uint kSpecSceneTexels = 27u;       // ... else from the texel bindings (kBindingBvhTexels), else from storage buffers
+CONST uint kSpecSceneTexels = 27u;       // the texel bindings (kBindingBvhTexels ...) hold the scene: read there, not from storage buffers
 CONST uint kSpecBsdfFamilies = 21u;     // kFamily* bits: the non-delta material families present
 CONST uint kSpecHasTextures = 22u;      // some material has a texture (uvs are computed at its hits)
 CONST uint kSpecEnvironmentMap = 23u;    // the environment light (kSpecEnvironmentLight) has an image
@@ -321,7 +323,7 @@ CONST uint kGridStageQuery = 4u;    // kernel sums at query points (tests)
 // The gather's bindings: the scene's (kSceneBindingCount), the sorted photons as a uniform texel
 // buffer (photon_gather.glsl) in the media's place (photon mapping scenes have no media).
 CONST uint kBindingSortedTexels = 4u;
-CONST uint kGatherBindingCount = 17u;
+CONST uint kGatherBindingCount = 18u;
 
 CONST uint kPhotonTraceGroupSize = 64u;
 CONST uint kGridGroupSize = 256u;

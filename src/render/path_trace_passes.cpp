@@ -179,7 +179,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecLevelSchedule, uint32_t(plan.levelSchedule)},
         {kSpecTestPmfWeight, gpu::specFloat(in.debias.testPmfWeight)},
         {kSpecSceneInUniforms, f.fitsUniforms},
-        {kSpecSceneTexels, !f.fitsUniforms},  // off on devices whose texel limit the scene exceeds
+        {kSpecSceneTexels, 1u},  // (where the uniform scene is not read) off beyond the device's texel limit
         {kSpecBruteForcePrims, f.bruteForcePrims},
         {kSpecTablesInUniforms, f.tablesFitUniforms},
         {kSpecBsdfFamilies, f.bsdfFamilies},
@@ -232,7 +232,8 @@ public:
                     deviceSceneSpec(context, plan.pathTraceSpec, b), kPathTraceUniformBindings, kSceneTexelBindings) {
         pipeline_.bindBuffers({b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims,
                                b.textures, b.environment, b.materials, b.lights, b.media, b.shadingNormals,
-                               b.nodeTexels(context), b.primTexels(context)});
+                               b.texels(context, b.nodes), b.texels(context, b.prims),
+                               b.texels(context, b.shadingNormals)});
         for (const auto& s : plan.pathTraceSpec)
             if (s.id == shader::kSpecLoopBudget && s.value != 0) loopBudget_ = deviceLoopBudget(context);
         const Camera& cam = scene.camera;

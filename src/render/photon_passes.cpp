@@ -147,6 +147,9 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
             "photon_trace reads BVH nodes and primitives from uniform buffers, the gather from uniform texel buffers",
             "more than 2048 BVH nodes or 1024 primitives: both read them from uniform texel buffers (from storage "
             "buffers on devices whose texel limit the scene exceeds)");
+    feature("uniform tables", f.tablesFitUniforms, "materials and lights read from uniform buffers (faster loads)",
+            fmt::format("more than {} materials or {} lights: read from storage buffers", shader::kMaxUniformMaterials,
+                        shader::kMaxUniformLights));
     feature("brute-force rays", f.bruteForcePrims > 0u,
             fmt::format("photon_trace tests the {} primitives in turn, no BVH walk", f.bruteForcePrims),
             fmt::format("BVH traversal over {} primitives (brute force takes at most {}, in uniform buffers)",
@@ -172,7 +175,8 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         {kSpecPhotonTestCosine, ph.testGatherCosine},
         {kSpecPhotonMaxBounces, in.maxBounces},
         {kSpecSceneInUniforms, f.fitsUniforms},
-        {kSpecSceneTexels, 1u},  // where the uniform scene is not read; off beyond the device's texel limit
+        {kSpecSceneTexels, 1u},  // (where the uniform scene is not read) off beyond the device's texel limit
+        {kSpecTablesInUniforms, f.tablesFitUniforms},
         {kSpecBruteForcePrims, f.bruteForcePrims},
         {kSpecSmoothNormals, f.smoothNormals},
         {kSpecBsdfFamilies, f.bsdfFamilies},
@@ -205,11 +209,12 @@ public:
                            (shader::kGatherBlockVec4s + (scene.integrator.photon.gatherCount + 1) / 2) * 16,
                        "gather blocks") {
         blockBuffer_.fill(0);
-        // Bindings 4-6 and 11-13 (media and uniform tables in the path tracer) are declared by
-        // neither shader: any buffer will do (the gather binds its texels at 4).
-        scene_ = {b.prims,    b.nodes,  b.materials,   b.lights, b.lights, b.lights, b.lights,        b.nodes,
-                  b.prims,    b.textures, b.environment, b.lights, b.lights, b.lights, b.shadingNormals,
-                  b.nodeTexels(context), b.primTexels(context)};
+        // Bindings 4-6 and 13 (the media in the path tracer) are declared by neither shader: any
+        // buffer will do (the gather binds its texels at 4).
+        scene_ = {b.prims,    b.nodes,    b.materials,   b.lights,    b.lights, b.lights,
+                  b.lights,   b.nodes,    b.prims,       b.textures,  b.environment, b.materials,
+                  b.lights,   b.lights,   b.shadingNormals, b.texels(context, b.nodes), b.texels(context, b.prims),
+                  b.texels(context, b.shadingNormals)};
         trace_.bindBuffers(scene_);
         gatherTexels_ = map_.texelsFit();  // as the gather pipeline was created
         bindGather();

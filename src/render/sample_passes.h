@@ -63,14 +63,18 @@ struct RenderBuffers {
     const gpu::Buffer* environment = nullptr;  // binding kBindingEnvironment of path_trace
     const gpu::Buffer* shadingNormals = nullptr;  // binding kBindingShadingNormals of every scene pass
 
-    // Whether the BVH nodes and primitives fit the device's texel buffers (kSpecSceneTexels).
+    // Whether the BVH nodes, primitives and shading normals fit the device's texel buffers
+    // (kSpecSceneTexels).
     bool sceneTexelsFit(const gpu::Context& context) const {
-        return gpu::Buffer::texelViewFits(context, nodes->size()) && gpu::Buffer::texelViewFits(context, prims->size());
+        return gpu::Buffer::texelViewFits(context, nodes->size()) && gpu::Buffer::texelViewFits(context, prims->size()) &&
+               gpu::Buffer::texelViewFits(context, shadingNormals->size());
     }
-    // What the texel bindings (kBindingBvhTexels, kBindingPrimsTexels) hold: the nodes and
-    // primitives, or where they do not fit (and no shader reads them) the small light table.
-    const gpu::Buffer* nodeTexels(const gpu::Context& context) const { return sceneTexelsFit(context) ? nodes : lights; }
-    const gpu::Buffer* primTexels(const gpu::Context& context) const { return sceneTexelsFit(context) ? prims : lights; }
+    // What the texel bindings (kBindingBvhTexels, kBindingPrimsTexels, kBindingShadingNormalTexels)
+    // hold: the scene's buffers, or where they do not fit (and no shader reads them) the small
+    // light table.
+    const gpu::Buffer* texels(const gpu::Context& context, const gpu::Buffer* b) const {
+        return sceneTexelsFit(context) ? b : lights;
+    }
 };
 
 // A plan's specialisation constants for this device: without the uniform scene (and so without
@@ -90,14 +94,16 @@ inline std::vector<gpu::SpecConstant> deviceSceneSpec(const gpu::Context& contex
     return spec;
 }
 
-// The scene's uniform bindings (kBindingBvhUniform, kBindingPrimsUniform) of path_trace, photon_trace and gather.
-constexpr uint32_t kSceneUniformBindings = (1u << shader::kBindingBvhUniform) | (1u << shader::kBindingPrimsUniform);
-// Their texel bindings (kBindingBvhTexels, kBindingPrimsTexels).
-constexpr uint32_t kSceneTexelBindings = (1u << shader::kBindingBvhTexels) | (1u << shader::kBindingPrimsTexels);
-// path_trace's: those, and the materials, lights and media (kSpecTablesInUniforms).
-constexpr uint32_t kPathTraceUniformBindings = kSceneUniformBindings | (1u << shader::kBindingMaterialsUniform) |
-                                               (1u << shader::kBindingLightsUniform) |
-                                               (1u << shader::kBindingMediaUniform);
+// The scene's uniform bindings (kBindingBvhUniform, kBindingPrimsUniform, and the materials and
+// lights: kSpecTablesInUniforms) of path_trace, photon_trace and gather.
+constexpr uint32_t kSceneUniformBindings = (1u << shader::kBindingBvhUniform) | (1u << shader::kBindingPrimsUniform) |
+                                           (1u << shader::kBindingMaterialsUniform) |
+                                           (1u << shader::kBindingLightsUniform);
+// Their texel bindings (kBindingBvhTexels, kBindingPrimsTexels), and the shading normals'.
+constexpr uint32_t kSceneTexelBindings = (1u << shader::kBindingBvhTexels) | (1u << shader::kBindingPrimsTexels) |
+                                         (1u << shader::kBindingShadingNormalTexels);
+// path_trace's: those, and the media (kSpecTablesInUniforms).
+constexpr uint32_t kPathTraceUniformBindings = kSceneUniformBindings | (1u << shader::kBindingMediaUniform);
 
 // Loop-budget counters of a render (shared/gpu_types.h kLoopStat*).
 struct LoopStats {
