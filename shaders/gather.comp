@@ -254,12 +254,14 @@ void setGlossyVertex(GatherVertex gv) {
 uint passSeed(uint seed, uint passInBlock) { return passInBlock == 0u ? seed : seed ^ pcgHash(passInBlock); }
 
 // The kernel sums of this slice at the gather vertex, times its f (base at r_b, difference
-// K_{r_{k+1}} - K_{r_k}). k-nearest gathers carry the nearest photons so far across the slices in
-// the block buffer and sum them in the last slice.
+// K_{r_{k+1}} - K_{r_k}); more: whether a later slice has photons for this vertex. k-nearest
+// gathers carry the nearest photons so far across the slices in the block buffer and sum them in
+// the vertex's last slice.
 void sliceKernelSums(PhotonMapRef map, uint bi, GatherVertex gv, bool unbiased, PhotonLevels levels, uint level,
-                     out vec3 kernelBase, out vec3 kernelDifference) {
+                     out vec3 kernelBase, out vec3 kernelDifference, out bool more) {
     kernelBase = vec3(0.0);
     kernelDifference = vec3(0.0);
+    more = false;
     if (gv.vertex == 0u) return;
     setGlossyVertex(gv);
     float rb2 = pc.radius * pc.radius;
@@ -269,8 +271,8 @@ void sliceKernelSums(PhotonMapRef map, uint bi, GatherVertex gv, bool unbiased, 
         NearestPhotons nearest;
         if (pc.slice == 0u) nearestClear(nearest, kGatherCount);
         else nearestLoad(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
-        nearestSearch(map, gv.p, rb2, kGatherCount, pc.slice * gatherSlicePhotons(kGatherCount), nearest);
-        if (pc.slice + 1u < pc.sliceCount) {
+        nearestSearch(map, gv.p, rb2, kGatherCount, pc.slice * kGatherSliceLength, nearest, more);
+        if (more) {
             nearestStore(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
             return;
         }
@@ -278,7 +280,7 @@ void sliceKernelSums(PhotonMapRef map, uint bi, GatherVertex gv, bool unbiased, 
     } else {
         float logRadius2 = unbiased ? photonLevelLogRadius2(levels, level) : 0.0;
         sums = gatherPhotons(map, gv.p, gv.n, rb2, unbiased, logRadius2, pc.logAreaRatio, kKernel,
-                             pc.slice * kGatherSlicePhotons, kPhotonMaxBounces - gv.vertex);
+                             pc.slice * kGatherSliceLength, kPhotonMaxBounces - gv.vertex, more);
     }
     kernelBase = gv.f * sums.base;
     kernelDifference = gv.f * sums.difference;
@@ -317,10 +319,12 @@ void gatherPixel() {
     if (pixel.x >= pc.width || pixel.y >= pc.height) return;
     PhotonMapRef map = PhotonMapRef(uvec2(pc.headerLo, pc.headerHi));
     if (map.h.storedCount > map.h.capacity) return;  // photons were dropped: the host repeats the pass
-    if (map.h.maxBucket > pc.sliceCount * gatherSlicePhotons(kGatherCount)) return;  // too few slices: repeated too
+    if (map.h.maxBucket > pc.sliceCount * kGatherSliceLength) return;  // too few slices: repeated too
     uint pixelIndex = pixel.y * pc.width + pixel.x;
     AccumRef block = AccumRef(uvec2(pc.blockLo, pc.blockHi));
     uint bi = pixelIndex * kBlockStride;
+    // A pass in slices: a pixel whose photons an earlier slice finished is done (below)
+    if (pc.slice > 0u && block.v[bi + kSliceBase].w != 0.0) return;
 
     // ---- Camera ray and the level of this pass ----
     Rng rng = rngCreate(pixelIndex, pc.pass, passSeed(pc.seed, pc.passInBlock));
@@ -349,19 +353,24 @@ void gatherPixel() {
         gv = loadGatherVertex(block, bi + kBlockVertex);
     }
     vec3 kernelBase, kernelDifference;
-    sliceKernelSums(map, bi, gv, unbiased, levels, level, kernelBase, kernelDifference);
+    bool more;
+    sliceKernelSums(map, bi, gv, unbiased, levels, level, kernelBase, kernelDifference, more);
 
-    // ---- Slices: the kernel sums of the earlier slices wait in the block buffer ----
+    // ---- Slices: the kernel sums of the earlier slices wait in the block buffer. A pixel
+    // completes its pass in the first slice after which its buckets hold no more photons and
+    // marks itself done (w of kSliceBase) for the later slices: in a pass of 90 slices most pixels
+    // finish in the first, and the rest of the image need not reload its state 89 times. ----
     if (pc.sliceCount > 1u) {
         if (pc.slice > 0u) {
             kernelBase += block.v[bi + kSliceBase].xyz;
             kernelDifference += block.v[bi + kSliceDifference].xyz;
         }
-        if (pc.slice + 1u < pc.sliceCount) {
+        if (more) {
             block.v[bi + kSliceBase] = vec4(kernelBase, 0.0);
             block.v[bi + kSliceDifference] = vec4(kernelDifference, 0.0);
             return;
         }
+        if (pc.slice + 1u < pc.sliceCount) block.v[bi + kSliceBase].w = 1.0;
     }
 
     // ---- The pass's sample (or its block's, when this pass completes it); accumulate ----

@@ -17,6 +17,8 @@
 // pipeline of its own (kSpecSortedTexels = 0), since a choice made at run time in the loop cost
 // the texels' whole gain.
 layout(constant_id = kSpecSortedTexels) const bool kSortedTexels = true;
+// Photons of each bucket one slice reads (gatherSlicePhotons(k) unless a test lowers it).
+layout(constant_id = kSpecGatherSliceLength) const uint kGatherSliceLength = kGatherSlicePhotons;
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Uvec4ArrayRef { uvec4 v[]; };
 
 uvec4 sortedTexel(Uvec4ArrayRef sorted, uint t) {
@@ -40,9 +42,10 @@ struct GatherSums {
 // The sorted photons of cell c (0..7) of the 2x2x2 cells around a query (low: gridNeighbourhood)
 // that a slice starting at sliceBegin reads, [first, last) with at most sliceLength of them; empty
 // when an earlier cell of the neighbourhood shares the bucket (each bucket is read once: visited
-// holds the earlier cells' buckets) or the bucket ends before the slice.
+// holds the earlier cells' buckets) or the bucket ends before the slice. Sets more when the bucket
+// holds photons beyond this slice.
 void neighbourhoodBucket(PhotonMapRef map, ivec3 low, uint c, uint sliceBegin, uint sliceLength,
-                         inout uint visited[8], out uint first, out uint last) {
+                         inout uint visited[8], out uint first, out uint last, inout bool more) {
     UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
     uint h = gridHash(low + ivec3(int(c & 1u), int((c >> 1u) & 1u), int(c >> 2u)), map.h.tableSize);
     bool seen = false;
@@ -55,6 +58,7 @@ void neighbourhoodBucket(PhotonMapRef map, ivec3 low, uint c, uint sliceBegin, u
     // where h begins (hash_grid_build.comp).
     uint begin = h == 0u ? 0u : cellStart.v[h - 1u];
     uint count = cellStart.v[h] - begin;
+    more = more || count - min(count, sliceBegin) > sliceLength;
     if (sliceBegin >= count) return;
     first = begin + sliceBegin;
     last = first + min(count - sliceBegin, sliceLength);
@@ -63,8 +67,9 @@ void neighbourhoodBucket(PhotonMapRef map, ivec3 low, uint c, uint sliceBegin, u
 // rb2 = r_b^2; logRadius2 = ln(r^2 / r_b^2), logStep2 = ln(r'^2 / r^2); no difference when
 // difference is false. Photons stored at a light-path vertex beyond maxVertex are left out (the
 // full path would have more scattering vertices than max_bounces allows: photon_trace.comp).
+// more: whether a later slice has photons for x.
 GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool difference, float logRadius2,
-                         float logStep2, uint kernel, uint sliceBegin, uint maxVertex) {
+                         float logStep2, uint kernel, uint sliceBegin, uint maxVertex, out bool more) {
     GatherSums s;
     s.base = vec3(0.0);
     s.difference = vec3(0.0);
@@ -74,9 +79,10 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
 
     ivec3 low = gridNeighbourhood(x, map.h.cellSize);
     uint visited[8];
+    more = false;
     for (uint c = 0u; c < 8u; ++c) {
         uint first, last;
-        neighbourhoodBucket(map, low, c, sliceBegin, kGatherSlicePhotons, visited, first, last);
+        neighbourhoodBucket(map, low, c, sliceBegin, kGatherSliceLength, visited, first, last, more);
         for (uint i = first; i < last; ++i) {
             // The position first: most photons of the cells lie beyond r_b, and the rest of the
             // photon is read only for those within (measured 7% faster than reading it whole).
@@ -136,15 +142,18 @@ void nearestReplaceFarthest(inout NearestPhotons s, uint k, float d2, uint index
     s.index[i] = index;
 }
 
-// Photons sliceBegin .. sliceBegin + gatherSlicePhotons(k) - 1 of each bucket around x (the
-// buckets of gatherPhotons) offered to the k nearest kept in s.
-void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint k, uint sliceBegin, inout NearestPhotons s) {
+// Photons sliceBegin .. sliceBegin + kGatherSliceLength - 1 of each bucket around x (the
+// buckets of gatherPhotons) offered to the k nearest kept in s; more: whether a later slice has
+// photons for x.
+void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint k, uint sliceBegin, inout NearestPhotons s,
+                   out bool more) {
     Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
     ivec3 low = gridNeighbourhood(x, map.h.cellSize);
     uint visited[8];
+    more = false;
     for (uint c = 0u; c < 8u; ++c) {
         uint first, last;
-        neighbourhoodBucket(map, low, c, sliceBegin, gatherSlicePhotons(k), visited, first, last);
+        neighbourhoodBucket(map, low, c, sliceBegin, kGatherSliceLength, visited, first, last, more);
         for (uint i = first; i < last; ++i) {
             vec3 d = x - uintBitsToFloat(sortedTexel(sorted, 2u * i).xyz);
             float d2 = dot(d, d);

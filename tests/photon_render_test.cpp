@@ -328,6 +328,51 @@ TEST_F(PhotonRender, CausticCornellBoxAgreesWithThePathTracer) {
     }
 }
 
+TEST_F(PhotonRender, GatherSlicesLeaveTheFilmUnchanged) {
+    // A pass whose fullest bucket holds more photons than one gather dispatch reads runs the gather
+    // in slices; a pixel completes its pass in the first slice after which its own buckets hold no
+    // more photons and sits out the rest. With the slice lowered to 8 photons a bucket
+    // (TELESCOPE_GATHER_SLICE), the caustic Cornell box's gathers run in dozens of slices a pass,
+    // and the film must equal the one gathered in one or two but for float rounding: the k nearest
+    // are the same photons, summed in the order the heap was left in; fixed radii add the slices'
+    // sums in turn.
+    // A pixel that finished before its last bucket's photons, or that added a finished pass again
+    // in a later slice, would change it.
+    const uint32_t paths = 20000;
+    for (const char* gatherCount : {"20", "0"}) {
+        SCOPED_TRACE(std::string("gather_photon_count ") + gatherCount);
+        Scene scene = loadTestScene("scenes/cornell-box-caustic.json", {{"camera.resolution", "[32,32]"},
+                                                                        {"integrator.debias", "null"},
+                                                                        {"integrator.photon_count", std::to_string(paths)},
+                                                                        {"integrator.gather_radius", "0.1"},
+                                                                        {"integrator.gather_photon_count", gatherCount}});
+        RenderRequest request;
+        request.spp = 3;
+        Renderer whole(sharedContext(), scene, 901);
+        whole.render(request);
+        const uint64_t fewSlices = whole.stats().passes.at("gather").dispatches;
+
+        ASSERT_EQ(setenv("TELESCOPE_GATHER_SLICE", "8", 1), 0);
+        Renderer sliced(sharedContext(), scene, 901);
+        sliced.render(request);
+        unsetenv("TELESCOPE_GATHER_SLICE");
+        const uint64_t manySlices = sliced.stats().passes.at("gather").dispatches;
+        EXPECT_LE(fewSlices, 3u * 3u) << "the unsliced render should gather in at most a few slices a pass";
+        EXPECT_GE(manySlices, 3u * 20u) << "the sliced render should gather in many slices a pass";
+
+        const Film a = whole.film(), b = sliced.film();
+        ASSERT_EQ(a.pixelCount(), b.pixelCount());
+        size_t lit = 0;
+        for (size_t i = 0; i < a.pixelCount(); ++i) {
+            const glm::dvec3 x = a.mean(shader::kChannelEstimate, i), y = b.mean(shader::kChannelEstimate, i);
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(x[c], y[c], 1e-5 * std::abs(x[c]) + 1e-12) << "pixel " << i << " channel " << c;
+            lit += x.x > 0.0;
+        }
+        EXPECT_GT(lit, a.pixelCount() / 2);
+    }
+}
+
 TEST_F(PhotonRender, PhotonsReadByAddressGiveTheSameFilm) {
     // The gather reads the sorted photons through a texel buffer, or by address when they exceed
     // the device's texel-buffer limit (a gather pipeline of its own, swapped in when the photon map

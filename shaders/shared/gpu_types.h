@@ -347,6 +347,9 @@ CONST uint kGatherSliceNearestPhotons = 512u;
 FN uint gatherSlicePhotons(uint gatherCount) {
     return gatherCount > 0u ? kGatherSliceNearestPhotons : kGatherSlicePhotons;
 }
+// The slice length the gather and the query stage are built with (photon_gather.glsl): the host's
+// PhotonMap::sliceLength, gatherSlicePhotons unless a test lowers it.
+CONST uint kSpecGatherSliceLength = 58u;
 
 // A stored photon: where it landed, where it came from (octahedral, 2 x snorm16) and its power
 // (flux per emitted path of the pass).

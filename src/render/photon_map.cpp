@@ -1,6 +1,7 @@
 #include "render/photon_map.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -40,7 +41,7 @@ gpu::PipelineDesc PhotonMap::stageDesc(uint32_t stage, bool texels, uint32_t ker
     constexpr uint32_t kTexels = (1u << 0) | (1u << 1), kStorageTexels = (1u << 2) | (1u << 3) | (1u << 4);
     return {"hash_grid_build", 5, uint32_t(sizeof(HashGridPush)),
             {{kSpecGridStage, stage}, {kSpecPhotonKernel, kernel}, {kSpecSortedTexels, texels},
-             {kSpecPhotonGatherCount, gatherCount}},
+             {kSpecPhotonGatherCount, gatherCount}, {kSpecGatherSliceLength, sliceLength(gatherCount)}},
             0, kTexels, kStorageTexels};
 }
 
@@ -138,8 +139,16 @@ uint32_t PhotonMap::maxBucket() const {
     return h.maxBucket;
 }
 
+uint32_t PhotonMap::sliceLength(uint32_t gatherCount) {
+    uint32_t length = shader::gatherSlicePhotons(gatherCount);
+    // Test aid: TELESCOPE_GATHER_SLICE lowers it, so that small scenes gather in many slices.
+    if (const char* v = std::getenv("TELESCOPE_GATHER_SLICE"); v && *v)
+        length = std::clamp<uint32_t>(uint32_t(std::strtoul(v, nullptr, 10)), 1u, length);
+    return length;
+}
+
 uint32_t PhotonMap::slicesFor(uint32_t photonsInBucket, uint32_t gatherCount) {
-    const uint32_t slice = shader::gatherSlicePhotons(gatherCount);
+    const uint32_t slice = sliceLength(gatherCount);
     return std::max<uint32_t>(1, (photonsInBucket + slice - 1) / slice);
 }
 
@@ -266,7 +275,7 @@ std::vector<glm::vec4> PhotonMap::runQuery(const std::vector<glm::vec3>& positio
     for (uint32_t slice = 0; slice < slices; ++slice) {
         gpu::CommandBatch batch(context_, 1);
         batch.begin();
-        p.sliceBegin = slice * gatherSlicePhotons(gatherCount);
+        p.sliceBegin = slice * sliceLength(gatherCount);
         batch.dispatch(pipeline, &p, sizeof(p), groups, 1, 1, "query");
         batch.submitAndWait();
     }

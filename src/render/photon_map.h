@@ -54,6 +54,9 @@ public:
     // Gather slices (dispatches of kGatherSlicePhotons photons per bucket) for a bucket this full.
     // (gatherCount: a k-nearest gather's k, whose slices are smaller; 0 for every photon within r.)
     static uint32_t slicesFor(uint32_t photonsInBucket, uint32_t gatherCount = 0);
+    // Photons of each bucket a slice reads: shader::gatherSlicePhotons, or fewer where
+    // $TELESCOPE_GATHER_SLICE asks (tests: many slices in small scenes).
+    static uint32_t sliceLength(uint32_t gatherCount = 0);
 
     // Records the hash-grid build over the stored photons: clear, count, scan, scatter.
     void recordBuild(gpu::CommandBatch& batch);

@@ -386,6 +386,7 @@ private:
     gpu::PipelineDesc gatherDesc(bool texels) const {
         std::vector<gpu::SpecConstant> spec = gatherSpec_;
         spec.push_back({shader::kSpecSortedTexels, texels});
+        spec.push_back({shader::kSpecGatherSliceLength, PhotonMap::sliceLength(integrator_.photon.gatherCount)});
         return {"gather", shader::kGatherBindingCount, uint32_t(sizeof(shader::GatherPush)), spec,
                 kSceneUniformBindings, kSceneTexelBindings | (1u << shader::kBindingSortedTexels)};
     }
