@@ -70,8 +70,8 @@ struct RenderBuffers {
                gpu::Buffer::texelViewFits(context, shadingNormals->size());
     }
     // What the texel bindings (kBindingBvhTexels, kBindingPrimsTexels, kBindingShadingNormalTexels)
-    // hold: the scene's buffers, or where they do not fit (and no shader reads them) the small
-    // light table.
+    // hold: the scene's buffers, or where they do not fit (and no shader reads them) the light
+    // table (kUniformSceneBytes: 4096 texels, within every device's limit of at least 65536).
     const gpu::Buffer* texels(const gpu::Context& context, const gpu::Buffer* b) const {
         return sceneTexelsFit(context) ? b : lights;
     }
