@@ -441,8 +441,11 @@ TEST_F(Stability, BigMeshSameImageFromTexelsAndStorageBuffers) {
                 worst = std::max(worst, std::abs(a - b) / std::max(1e-3, std::abs(a)));
                 control = std::max(control, std::abs(a - other.mean(shader::kChannelEstimate, i)[k]) / std::max(1e-3, std::abs(a)));
             }
-        if (photons) EXPECT_LT(worst, 1e-5) << "texels and storage buffers differ";
-        else EXPECT_EQ(worst, 0.0) << "texels and storage buffers differ";
+        if (photons) {
+            EXPECT_LT(worst, 1e-5) << "texels and storage buffers differ";
+        } else {
+            EXPECT_EQ(worst, 0.0) << "texels and storage buffers differ";
+        }
         EXPECT_GT(control, 1e-2) << "another seed should differ";
     }
 }

@@ -4,14 +4,17 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <fstream>
 #include <future>
 #include <stdexcept>
 #include <unordered_map>
 
 #include <fmt/format.h>
+#include <spirv-tools/libspirv.h>
 #include <spirv-tools/optimizer.hpp>
 
+#include "core/atomic_file.h"
 #include "gpu/buffer.h"
 #include "gpu/context.h"
 #include "gpu/vk_check.h"
@@ -72,6 +75,106 @@ bool specialiseSpirv(const std::vector<uint32_t>& code, const std::vector<SpecCo
     return true;
 }
 
+// ---- Specialised modules on disk ----
+namespace {
+constexpr uint32_t kCacheMagic = 0x43505354u;  // "TSPC"
+constexpr uint32_t kCacheFormat = 1u;
+
+uint64_t fnv1a(const void* data, size_t bytes, uint64_t h = 0xcbf29ce484222325ull) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 0x100000001b3ull;
+    return h;
+}
+
+// The header an entry starts with: everything the specialised module depends on.
+std::vector<uint32_t> cacheKey(const std::vector<uint32_t>& code, const std::vector<SpecConstant>& spec) {
+    const uint64_t codeHash = fnv1a(code.data(), code.size() * 4);
+    const std::string tools = spvSoftwareVersionString();
+    const uint64_t toolsHash = fnv1a(tools.data(), tools.size());
+    std::vector<uint32_t> key = {kCacheMagic,         kCacheFormat,           uint32_t(code.size()),
+                                 uint32_t(codeHash),  uint32_t(codeHash >> 32), uint32_t(toolsHash),
+                                 uint32_t(toolsHash >> 32), uint32_t(spec.size())};
+    for (const auto& s : spec) {
+        key.push_back(s.id);
+        key.push_back(s.value);
+    }
+    return key;
+}
+// Keeps the cache under kCacheBytes: after a write that passes it, the least recently written
+// entries go until it holds three quarters of it (renders that sweep a constant leave one entry
+// per value).
+constexpr uintmax_t kCacheBytes = uintmax_t(64) << 20;
+void trimSpirvCache(const std::string& dir) {
+    namespace fs = std::filesystem;
+    std::vector<std::pair<fs::file_time_type, fs::path>> files;
+    uintmax_t total = 0;
+    for (const auto& e : fs::directory_iterator(dir)) {
+        if (!e.is_regular_file() || e.path().extension() != ".spv") continue;
+        total += e.file_size();
+        files.emplace_back(e.last_write_time(), e.path());
+    }
+    if (total <= kCacheBytes) return;
+    std::sort(files.begin(), files.end());
+    for (const auto& f : files) {
+        if (total <= kCacheBytes / 4 * 3) break;
+        std::error_code ec;
+        const uintmax_t size = fs::file_size(f.second, ec);
+        if (!ec && fs::remove(f.second, ec)) total -= size;
+    }
+}
+}  // namespace
+
+std::string spirvCacheDirectory() {
+    if (const char* off = std::getenv("TELESCOPE_SPIRV_CACHE"); off && std::string(off) == "0") return "";
+    if (const char* dir = std::getenv("TELESCOPE_CACHE_DIR"); dir && *dir) return dir;
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::string(xdg) + "/telescope";
+    if (const char* home = std::getenv("HOME"); home && *home) return std::string(home) + "/.cache/telescope";
+    return "";
+}
+
+bool specialiseSpirvCached(const std::string& name, const std::vector<uint32_t>& code,
+                           const std::vector<SpecConstant>& spec, std::vector<uint32_t>& out, std::string* error) {
+    const std::string dir = spirvCacheDirectory();
+    if (dir.empty()) return specialiseSpirv(code, spec, out, error);
+    const std::vector<uint32_t> key = cacheKey(code, spec);
+    const std::string path =
+        fmt::format("{}/{}-{:016x}.spv", dir, name, fnv1a(key.data(), key.size() * 4));
+    // An entry: the key, the module's size and hash (a torn or damaged entry is a miss), the module.
+    {
+        std::ifstream in(path, std::ios::binary | std::ios::ate);
+        const std::streamsize size = in ? std::streamsize(in.tellg()) : std::streamsize(0);
+        const size_t head = key.size() + 3;
+        if (in && size > std::streamsize(head * 4) && size % 4 == 0) {
+            std::vector<uint32_t> entry(size_t(size) / 4);
+            in.seekg(0);
+            if (in.read(reinterpret_cast<char*>(entry.data()), size) &&
+                std::equal(key.begin(), key.end(), entry.begin()) && entry[key.size()] == entry.size() - head) {
+                const uint64_t hash = fnv1a(entry.data() + head, (entry.size() - head) * 4);
+                if (entry[key.size() + 1] == uint32_t(hash) && entry[key.size() + 2] == uint32_t(hash >> 32) &&
+                    entry[head] == 0x07230203u) {
+                    out.assign(entry.begin() + std::ptrdiff_t(head), entry.end());
+                    return true;
+                }
+            }
+        }
+    }
+    if (!specialiseSpirv(code, spec, out, error)) return false;
+    try {
+        std::filesystem::create_directories(dir);
+        const uint64_t hash = fnv1a(out.data(), out.size() * 4);
+        const uint32_t body[3] = {uint32_t(out.size()), uint32_t(hash), uint32_t(hash >> 32)};
+        writeStreamAtomically(path, [&](std::ostream& o) {
+            o.write(reinterpret_cast<const char*>(key.data()), std::streamsize(key.size() * 4));
+            o.write(reinterpret_cast<const char*>(body), sizeof(body));
+            o.write(reinterpret_cast<const char*>(out.data()), std::streamsize(out.size() * 4));
+        });
+        trimSpirvCache(dir);
+    } catch (const std::exception&) {
+        // A cache that cannot be written (read-only home, full disk) costs the optimizer's time only.
+    }
+    return true;
+}
+
 bool hostSpecialisation() {
     const char* v = std::getenv("TELESCOPE_DRIVER_SPECIALISATION");
     return !(v && *v && std::string(v) != "0");
@@ -91,7 +194,7 @@ ComputePipeline::ComputePipeline(const Context& context, std::string shaderName,
         if (!spec.empty() && hostSpecialisation()) {
             std::vector<uint32_t> out;
             // On failure the driver specialises the original module (slower to create, same code).
-            if (specialiseSpirv(code, spec, out)) {
+            if (specialiseSpirvCached(name_, code, spec, out)) {
                 code = std::move(out);
                 specialised = true;
             }

@@ -41,6 +41,21 @@ bool specialiseSpirv(const std::vector<uint32_t>& code, const std::vector<SpecCo
 // driver (TELESCOPE_DRIVER_SPECIALISATION=1, for A/B measurements).
 bool hostSpecialisation();
 
+// specialiseSpirv through a cache of specialised modules on disk: the optimizer takes 65 ms of the
+// path tracer's 0.1 s of pipeline setup in every process (Tungsten's Cornell box), so a later
+// process reads the module it wrote instead (as Mesa caches what it compiles from the module).
+// The directory is $TELESCOPE_CACHE_DIR, else $XDG_CACHE_HOME/telescope, else
+// $HOME/.cache/telescope; TELESCOPE_SPIRV_CACHE=0 turns the cache off. An entry repeats its whole
+// key (the input module's size and hash, the optimizer's version, every constant) and the hash of
+// its module, so a stale, colliding, torn or damaged entry is a miss, never another module; an
+// entry that cannot be read or written costs only the optimizer's time. `name` names the entry's
+// file. The cache keeps under 64 MiB (the oldest entries go first).
+bool specialiseSpirvCached(const std::string& name, const std::vector<uint32_t>& code,
+                           const std::vector<SpecConstant>& spec, std::vector<uint32_t>& out,
+                           std::string* error = nullptr);
+// The cache's directory ("" when it is off or no directory is known).
+std::string spirvCacheDirectory();
+
 class ComputePipeline {
 public:
     // Binding i is a storage buffer; a uniform buffer when bit i of uniformBindings is set; a
