@@ -128,20 +128,18 @@ void queryStage(PhotonMapRef map, uint id) {
         NearestPhotons nearest;
         if (pc.sliceBegin == 0u) nearestClear(nearest, kGatherCount);
         else nearestLoad(state, id * stride + 1u, nearest, kGatherCount);
-        bool more;
+        bool more;  // (unused, as below)
         nearestSearch(map, src.v[2u * id].xyz, pc.radius * pc.radius, kGatherCount, pc.sliceBegin, nearest, more);
         nearestStore(state, id * stride + 1u, nearest, kGatherCount);
         GatherSums s = nearestSums(map, nearest, src.v[2u * id + 1u].xyz, pc.radius * pc.radius, kGatherCount,
                                    kKernel, 0xffffffffu);
-        dst.v[id * stride] = vec4(s.base.x, 0.0, float(s.found), more ? 1.0 : 0.0);
+        dst.v[id * stride] = vec4(s.base.x, 0.0, float(s.found), 0.0);
     } else if (id < pc.count) {
-        bool more;
+        bool more;  // (the host runs every slice of the queries: unused)
         GatherSums s = gatherPhotons(map, src.v[2u * id].xyz, src.v[2u * id + 1u].xyz, pc.radius * pc.radius, true,
                                      pc.logRadius2, pc.logStep2, kKernel, pc.sliceBegin, 0xffffffffu, more);
         vec4 sums = vec4(s.base.x, s.difference.x, float(s.found), 0.0);
-        sums = pc.sliceBegin == 0u ? sums : dst.v[id] + sums;
-        sums.w = more ? 1.0 : 0.0;  // whether a later slice has photons for this query
-        dst.v[id] = sums;
+        dst.v[id] = pc.sliceBegin == 0u ? sums : dst.v[id] + sums;
     }
 }
 

@@ -146,7 +146,7 @@ CONST uint kMaxUniformPrims = 1024u;     // kUniformSceneBytes / sizeof(Prim)
 CONST uint kMaxUniformMaterials = 682u;  // kUniformSceneBytes / sizeof(MaterialGpu), rounded down
 CONST uint kMaxUniformLights = 1365u;    // ... / sizeof(LightGpu)
 CONST uint kMaxUniformMedia = 273u;      // ... / sizeof(MediumGpu)
-CONST uint kSceneBindingCount = 18u;     // photon_trace and gather: the scene only (4-6 and 10-13 unused; the gather's texels at 4)
+CONST uint kSceneBindingCount = 18u;     // photon_trace and gather: the scene only (4-6 and 13 unused; the gather's texels at 4)
 
 // Specialisation constant ids: features a scene lacks are folded away by the compiler.
 CONST uint kSpecMaxBounces = 0u;
