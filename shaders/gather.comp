@@ -24,7 +24,6 @@ layout(binding = kBindingSortedTexels) uniform usamplerBuffer sortedTexels;
 // frame (t, b, n) around the normal facing the camera chain, wi towards the chain (local): each
 // photon's factor f(wi, wo) = eval / cos wo (the photon's flux carries the cosine). Lambertian
 // vertices keep f outside the sums; scenes without glossy materials fold all of it away.
-layout(constant_id = kSpecPhotonTestCosine) const bool kTestCosine = false;  // a test's wrong variant: f |cos wo|
 struct GlossyVertex {
     bool on;
     MaterialGpu m;
@@ -43,13 +42,6 @@ vec3 photonBsdf(vec3 w) {
 #include "accumulate.glsl"
 
 layout(local_size_x = kGatherGroupSize, local_size_y = kGatherGroupSize) in;
-
-layout(constant_id = kSpecFilter) const uint kFilter = kFilterTent;
-layout(constant_id = kSpecPhotonEstimator) const uint kEstimator = kPhotonBiased;
-layout(constant_id = kSpecPhotonKernel) const uint kKernel = kKernelCone;
-layout(constant_id = kSpecPhotonSchedule) const uint kSchedule = kLevelScheduleUniform;
-layout(constant_id = kSpecPhotonGatherCount) const uint kGatherCount = 0u;  // k nearest (biased only), 0: all within r
-layout(constant_id = kSpecPhotonRadianceScaling) const bool kRadianceScaling = true;
 
 layout(push_constant) uniform Push { GatherPush pc; };
 

@@ -19,9 +19,6 @@
 #include "shared/photon_density.h"
 
 layout(local_size_x = kGridGroupSize) in;
-layout(constant_id = kSpecGridStage) const uint kStage = kGridStageCount;
-layout(constant_id = kSpecPhotonKernel) const uint kKernel = kKernelCone;
-layout(constant_id = kSpecPhotonGatherCount) const uint kGatherCount = 0u;  // query: k nearest (0: all within r)
 layout(push_constant) uniform Push { HashGridPush pc; };
 
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer PhotonMapRef { PhotonMapHeader h; };
@@ -34,12 +31,12 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4ArrayRe
 // scatter), and in bucket order (written by the scatter, read by the query). Lavapipe reads and
 // writes a texel for all lanes at once, where a storage-buffer or address access loops over the
 // lanes once per component.
-layout(binding = 0) uniform usamplerBuffer sortedTexels;
-layout(binding = 1) uniform usamplerBuffer photonTexels;
-layout(binding = 2, rgba32ui) uniform writeonly uimageBuffer sortedImage;
+layout(binding = kGridBindingSortedTexels) uniform usamplerBuffer sortedTexels;
+layout(binding = kGridBindingPhotonTexels) uniform usamplerBuffer photonTexels;
+layout(binding = kGridBindingSortedImage, rgba32ui) uniform writeonly uimageBuffer sortedImage;
 // The table's counts and starts, 4 buckets a texel (the scan and add of the table's own level).
-layout(binding = 3, rgba32ui) uniform uimageBuffer countImage;
-layout(binding = 4, rgba32ui) uniform uimageBuffer startImage;
+layout(binding = kGridBindingCountImage, rgba32ui) uniform uimageBuffer countImage;
+layout(binding = kGridBindingStartImage, rgba32ui) uniform uimageBuffer startImage;
 #include "photon_gather.glsl"
 
 // Per subgroup of the workgroup: its total and its largest count (at most one subgroup per thread).

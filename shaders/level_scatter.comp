@@ -9,9 +9,6 @@
 #include "shared/level_pmf.h"
 
 layout(local_size_x = kLevelQueueGroupSize) in;
-layout(constant_id = kSpecPmfType) const uint kPmfType = 0u;
-layout(constant_id = kSpecPmfR) const float kPmfR = 0.65;
-layout(constant_id = kSpecPmfAlpha) const float kPmfAlpha = 0.6666667;
 layout(push_constant) uniform Push { PathTracePush pc; };
 
 #include "level_queue.glsl"

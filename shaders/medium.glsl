@@ -14,20 +14,6 @@
 
 #include "shared/bsdf.h"  // thinSheetReflectance (shadow rays through thin sheets)
 
-layout(constant_id = kSpecHasMedia) const bool kHasMedia = false;
-layout(constant_id = kSpecTrEstimator) const uint kTrEstimatorType = 1u;
-layout(constant_id = kSpecTrLevel) const uint kTrLevel = 1u;
-layout(constant_id = kSpecTrPmfType) const uint kTrPmfType = 0u;
-layout(constant_id = kSpecTrPmfR) const float kTrPmfR = 0.65;
-layout(constant_id = kSpecTrPmfAlpha) const float kTrPmfAlpha = 0.6666667;
-layout(constant_id = kSpecTrTaylorTerms) const uint kTrTaylorTerms = 1u;
-layout(constant_id = kSpecTrTaylorPoints) const uint kTrTaylorPoints = 0u;
-layout(constant_id = kSpecCameraMedium) const uint kCameraMedium = 0u;
-layout(constant_id = kSpecHasGrids) const bool kHasGrids = false;
-layout(constant_id = kSpecTrModel) const uint kSceneTrModel = 0xffffffffu;
-layout(constant_id = kSpecHasInhomogeneousMedia) const bool kHasInhomogeneous = true;
-layout(constant_id = kSpecTrPilot) const bool kTrPilot = false;
-
 layout(std430, binding = kBindingMedia) readonly buffer MediaBuffer { MediumGpu media[]; };
 layout(std140, binding = kBindingMediaUniform) uniform MediaUniform { MediumGpu uniformMedia[kMaxUniformMedia]; };
 MediumGpu sceneMedium(uint i) {

@@ -19,37 +19,13 @@
 layout(local_size_x = kPathTraceGroupSize, local_size_y = kPathTraceGroupSize) in;
 
 // ---- Loop budget (shared/gpu_types.h "Lavapipe's loop cap") ----
-layout(constant_id = kSpecLoopBudget) const uint kLoopBudget = 0u;
 uint gLoopTicks = 0u;  // loop iterations this lane has counted in this dispatch
 // A lane starts no step past gLoopBudget (it carries its path instead); a walk that passes
 // gLoopHardLimit stops, and the lane's dispatch is undone and retried (main).
 uint gLoopBudget = kLoopBudget;
 uint gLoopHardLimit = kHeavyLoopBudget;
 
-layout(constant_id = kSpecMaxBounces) const uint kMaxBounces = 64u;
-layout(constant_id = kSpecMinBounces) const uint kMinBounces = 0u;
-layout(constant_id = kSpecRoulette) const bool kRoulette = true;
-layout(constant_id = kSpecDebiasMode) const uint kDebiasMode = 0u;
-layout(constant_id = kSpecPmfType) const uint kPmfType = 0u;
-layout(constant_id = kSpecPmfR) const float kPmfR = 0.65;
-layout(constant_id = kSpecPmfAlpha) const float kPmfAlpha = 0.6666667;
-layout(constant_id = kSpecHasSpheres) const bool kHasSpheres = true;
-layout(constant_id = kSpecHasDisks) const bool kHasDisks = true;
-layout(constant_id = kSpecHasSpecular) const bool kHasSpecular = true;
-layout(constant_id = kSpecLightCount) const uint kLightCount = 0u;
-layout(constant_id = kSpecLightSampling) const bool kLightSampling = true;
-layout(constant_id = kSpecTwoSided) const bool kTwoSided = true;
-layout(constant_id = kSpecFilter) const uint kFilter = kFilterTent;
-layout(constant_id = kSpecEnvironmentLight) const uint kEnvironmentLight = 0xffffffffu;
-layout(constant_id = kSpecCapLight) const uint kCapLight = 0xffffffffu;
-layout(constant_id = kSpecMaxTraceDepth) const uint kMaxTraceDepth = 4096u;
-layout(constant_id = kSpecRayEpsilon) const float kRayEpsilon = 1e-5;
-layout(constant_id = kSpecPilot) const bool kPilot = false;
-layout(constant_id = kSpecLevelSchedule) const uint kLevelSchedule = kLevelSchedulePerPixel;
-layout(constant_id = kSpecTestPmfWeight) const float kTestPmfWeight = 1.0;
-layout(constant_id = kSpecBsdfFamilies) const uint kBsdfFamilies = kFamilyAll;
 #define BSDF_FAMILIES kBsdfFamilies  // shared/bsdf.h: the glossy families this scene uses
-layout(constant_id = kSpecHasTextures) const bool kHasTextures = false;
 
 layout(std430, binding = kBindingPrims) readonly buffer PrimBuffer { Prim prims[]; };
 layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[]; };
@@ -57,7 +33,6 @@ layout(std430, binding = kBindingMaterials) readonly buffer MaterialBuffer { Mat
 layout(std430, binding = kBindingLights) readonly buffer LightBuffer { LightGpu lights[]; };
 // The same tables as uniform buffers, read when they fit (kSpecTablesInUniforms; the media's in
 // medium.glsl): lavapipe gathers a divergent uniform load with vector instructions.
-layout(constant_id = kSpecTablesInUniforms) const bool kTablesInUniforms = false;
 layout(std140, binding = kBindingMaterialsUniform) uniform MaterialUniform { MaterialGpu uniformMaterials[kMaxUniformMaterials]; };
 layout(std140, binding = kBindingLightsUniform) uniform LightUniform { LightGpu uniformLights[kMaxUniformLights]; };
 MaterialGpu sceneMaterial(uint i) {
@@ -71,7 +46,6 @@ LightGpu sceneLight(uint i) {
 layout(std430, binding = kBindingTextures) readonly buffer TextureBuffer { vec4 textureData[]; };
 // The environment image and its sampling tables (shared/environment_map.h), read only when the
 // environment light has one.
-layout(constant_id = kSpecEnvironmentMap) const bool kEnvironmentMap = false;
 layout(std430, binding = kBindingEnvironment) readonly buffer EnvironmentBuffer { float envData[]; };
 #define ENV_DATA(i) envData[i]
 #include "shared/environment_map.h"

@@ -16,9 +16,6 @@
 // A sorted array larger than the device lets a texel buffer be is read by address instead: a
 // pipeline of its own (kSpecSortedTexels = 0), since a choice made at run time in the loop cost
 // the texels' whole gain.
-layout(constant_id = kSpecSortedTexels) const bool kSortedTexels = true;
-// Photons of each bucket one slice reads (gatherSlicePhotons(k) unless a test lowers it).
-layout(constant_id = kSpecGatherSliceLength) const uint kGatherSliceLength = kGatherSlicePhotons;
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Uvec4ArrayRef { uvec4 v[]; };
 
 uvec4 sortedTexel(Uvec4ArrayRef sorted, uint t) {

@@ -7,20 +7,7 @@
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
 
-layout(constant_id = kSpecHasSpheres) const bool kHasSpheres = true;
-layout(constant_id = kSpecHasDisks) const bool kHasDisks = true;
-layout(constant_id = kSpecHasSpecular) const bool kHasSpecular = true;
-layout(constant_id = kSpecLightCount) const uint kLightCount = 0u;
-layout(constant_id = kSpecTwoSided) const bool kTwoSided = true;
-layout(constant_id = kSpecRayEpsilon) const float kRayEpsilon = 1e-5;
-layout(constant_id = kSpecPhotonMaxBounces) const uint kPhotonMaxBounces = 64u;
-layout(constant_id = kSpecPhotonNextEvent) const bool kNextEvent = true;
-layout(constant_id = kSpecBsdfFamilies) const uint kBsdfFamilies = kFamilyAll;
 #define BSDF_FAMILIES kBsdfFamilies  // shared/bsdf.h: the glossy families this scene uses
-layout(constant_id = kSpecHasTextures) const bool kHasTextures = false;
-layout(constant_id = kSpecEnvironmentLight) const uint kEnvironmentLight = 0xffffffffu;
-layout(constant_id = kSpecCapLight) const uint kCapLight = 0xffffffffu;
-layout(constant_id = kSpecEnvironmentMap) const bool kEnvironmentMap = false;
 
 layout(std430, binding = kBindingPrims) readonly buffer PrimBuffer { Prim prims[]; };
 layout(std430, binding = kBindingBvh) readonly buffer BvhBuffer { BvhNode nodes[]; };
@@ -39,7 +26,6 @@ layout(std430, binding = kBindingEnvironment) readonly buffer EnvironmentBuffer 
 // The materials and lights as uniform buffers when they fit (kSpecTablesInUniforms, as in the
 // path tracer), with the hidden zero of scene_geometry.glsl in the index: a light read at a
 // constant index (one light; the environment light) must not be folded into the shader.
-layout(constant_id = kSpecTablesInUniforms) const bool kTablesInUniforms = false;
 layout(std140, binding = kBindingMaterialsUniform) uniform MaterialUniform { MaterialGpu uniformMaterials[kMaxUniformMaterials]; };
 layout(std140, binding = kBindingLightsUniform) uniform LightUniform { LightGpu uniformLights[kMaxUniformLights]; };
 MaterialGpu sceneMaterial(uint i) {

@@ -9,7 +9,6 @@
 #include "shared/texture.h"
 
 // ---- Shading normals ----
-layout(constant_id = kSpecSmoothNormals) const bool kSmoothNormals = false;
 layout(std430, binding = kBindingShadingNormals) readonly buffer ShadingNormalBuffer { vec4 shadingNormals[]; };
 layout(binding = kBindingShadingNormalTexels) uniform usamplerBuffer shadingNormalTexels;
 vec4 shadingNormalData(uint i) {

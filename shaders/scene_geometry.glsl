@@ -7,10 +7,8 @@
 // primitive by primitive without the BVH (kSpecBruteForcePrims).
 // Included by path_trace_main.glsl and photon_scene.glsl.
 
-layout(constant_id = kSpecSceneInUniforms) const bool kSceneInUniforms = false;
 layout(std140, binding = kBindingBvhUniform) uniform BvhUniform { BvhNode uniformNodes[kMaxUniformNodes]; };
 layout(std140, binding = kBindingPrimsUniform) uniform PrimUniform { Prim uniformPrims[kMaxUniformPrims]; };
-layout(constant_id = kSpecSceneTexels) const bool kSceneTexels = false;
 layout(binding = kBindingBvhTexels) uniform usamplerBuffer bvhTexels;
 layout(binding = kBindingPrimsTexels) uniform usamplerBuffer primTexels;
 
@@ -31,7 +29,6 @@ layout(binding = kBindingPrimsTexels) uniform usamplerBuffer primTexels;
 // - photon_trace adds it to every index (SCENE_UNIFORM_INDEX_HIDDEN), as first done here.
 // BVH walks read nodes at data-dependent offsets: they keep the plain index in the path tracer.
 // Stability.RepeatedPassesDoNotGrowTheProcess checks both.
-layout(constant_id = kSpecBruteForcePrims) const uint kBruteForcePrims = 0u;
 uint uniformIndex(uint i) {
 #ifdef SCENE_UNIFORM_INDEX_HIDDEN
     return i + uint(gl_NumWorkGroups.z == 0u);

@@ -50,7 +50,7 @@ const std::vector<RegionMean>& pathTracedRegions() {
 // one-sided at the floor's smooth irradiance), which shifted 3 of 32 batch means above the answer
 // in a region whose t was -1.5.
 BatchVerdict compare(const Scene& scene, const std::vector<RegionMean>& reference, const char* label) {
-    return compareBatchMeans(regionBatchMeans(scene, kBlock, 32, 4, 5), reference, 1, kAlpha, label);
+    return compareBatchMeans(regionBatchMeans(scene, kBlock, 16, 4, 5), reference, 1, kAlpha, label);
 }
 
 class PhotonRefraction : public ::testing::Test {

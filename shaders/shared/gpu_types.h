@@ -148,36 +148,8 @@ CONST uint kMaxUniformLights = 1365u;    // ... / sizeof(LightGpu)
 CONST uint kMaxUniformMedia = 273u;      // ... / sizeof(MediumGpu)
 CONST uint kSceneBindingCount = 18u;     // photon_trace and gather: the scene only (4-6 and 13 unused; the gather's texels at 4)
 
-// Specialisation constant ids: features a scene lacks are folded away by the compiler.
-CONST uint kSpecMaxBounces = 0u;
-CONST uint kSpecMinBounces = 1u;
-CONST uint kSpecDebiasMode = 2u;
-CONST uint kSpecPmfType = 3u;
-CONST uint kSpecPmfR = 4u;
-CONST uint kSpecPmfAlpha = 5u;
-CONST uint kSpecHasSpheres = 6u;
-CONST uint kSpecHasDisks = 7u;
-CONST uint kSpecHasSpecular = 8u;
-CONST uint kSpecLightCount = 9u;
-CONST uint kSpecLightSampling = 10u;
-CONST uint kSpecTwoSided = 11u;
-CONST uint kSpecFilter = 12u;
-CONST uint kSpecEnvironmentLight = 13u;  // light index, or 0xffffffff for none
-CONST uint kSpecCapLight = 20u;          // the infinite_sphere_cap light index, or 0xffffffff for none
-CONST uint kSpecMaxTraceDepth = 14u;
+// Specialisation constants (ids, GLSL declarations): shared/spec_constants.h, included at the end.
 CONST uint kTraceDepthCap = 4096u;       // rays per path at most (a debiased level beyond adds nothing)
-CONST uint kSpecRayEpsilon = 15u;        // absolute ray offset, from the scene size
-CONST uint kSpecPilot = 16u;             // pmf pilot: every sample takes the level pc.pilotLevel
-CONST uint kSpecLevelSchedule = 17u;     // kLevelSchedule*: how per-sample levels are laid out on lanes
-CONST uint kSpecTestPmfWeight = 18u;     // test-only: scales every 1 / p(j) (debias.test_pmf_weight)
-CONST uint kSpecSceneInUniforms = 19u;   // BVH nodes and primitives read from the uniform bindings
-CONST uint kSpecSceneTexels = 27u;       // the texel bindings (kBindingBvhTexels ...) hold the scene: read there, not from storage buffers
-CONST uint kSpecBsdfFamilies = 21u;     // kFamily* bits: the non-delta material families present
-CONST uint kSpecHasTextures = 22u;      // some material has a texture (uvs are computed at its hits)
-CONST uint kSpecEnvironmentMap = 23u;    // the environment light (kSpecEnvironmentLight) has an image
-CONST uint kSpecSmoothNormals = 25u;     // some triangle is smooth-shaded: read kBindingShadingNormals
-CONST uint kSpecTablesInUniforms = 24u;  // materials, lights and media read from the uniform bindings
-CONST uint kSpecLoopBudget = 26u;        // loop iterations a path_trace lane may run per dispatch (0: no limit)
 
 // ---- Lavapipe's loop cap and path_trace's loop budget (docs/ARCHITECTURE.md "Loop budget") ----
 // Lavapipe (llvmpipe) keeps one loop counter per SIMD group and shader invocation: every
@@ -210,24 +182,8 @@ CONST uint kLoopStatCount = 5u;
 // A continuation record: kContinuationVec4s vec4 per lane (path_trace_main.glsl saveRecord).
 CONST uint kContinuationVec4s = 8u;
 
-// Participating media, ids 32..47 (shaders/medium.glsl).
-CONST uint kSpecHasMedia = 32u;          // media or forward (index-matched) boundaries present
-CONST uint kSpecTrEstimator = 33u;       // kTrEst* (shared/transmittance_estimators.h)
-CONST uint kSpecTrLevel = 34u;
-CONST uint kSpecTrPmfType = 35u;
-CONST uint kSpecTrPmfR = 36u;
-CONST uint kSpecTrPmfAlpha = 37u;
-CONST uint kSpecCameraMedium = 38u;      // medium index + 1, 0 = vacuum
-CONST uint kSpecHasGrids = 39u;
-CONST uint kSpecTrModel = 40u;           // the transmittance model every medium shares, or 0xffffffff
-CONST uint kSpecHasInhomogeneousMedia = 41u;  // a medium whose density varies (exponential or grid)
-CONST uint kSpecBruteForcePrims = 42u;   // n > 0: rays test the scene's n primitives in turn, no BVH
-CONST uint kMaxBruteForcePrims = 20u;     // the largest scene traced that way (break-even ~24: docs/BENCHMARKS.md)
-CONST uint kSpecTrTaylorTerms = 43u;     // taylor: terms evaluated before the roulette
-CONST uint kSpecTrTaylorPoints = 44u;    // taylor: points of each factor's comb (0: from the density bounds)
-CONST uint kSpecRoulette = 45u;          // Russian roulette on path throughput (off in derivative renders)
-CONST uint kSpecTrPilot = 46u;          // transmittance pmf pilot: debiased marching at the level pc.pilotLevel
-CONST uint kTrPilotHalfWeight = 0x80000000u;  // that pilot's pc.pilotLevel bit: the correction weighted by 2, not 1
+CONST uint kMaxBruteForcePrims = 20u;     // the largest scene traced primitive by primitive (kSpecBruteForcePrims) (break-even ~24: docs/BENCHMARKS.md)
+CONST uint kTrPilotHalfWeight = 0x80000000u;  // the transmittance pilot (kSpecTrPilot): its pc.pilotLevel bit: the correction weighted by 2, not 1
 
 CONST uint kPathTraceGroupSize = 8u;  // 8x8 pixel tiles
 
@@ -293,24 +249,11 @@ static_assert(sizeof(telescope::shader::PathTracePush) == 120);  // at most 128 
 #endif
 
 // ---- Photon mapping passes (photon_trace, hash_grid_build, gather; docs/ESTIMATORS.md section 3) ----
-// Specialisation ids 48..63 (32..47 belong to participating media). The photon passes also take
-// the scene switches of the path tracer (kSpecHasSpheres ... kSpecRayEpsilon, same ids). Every
+// Their specialisation constants are ids 48..63 of shared/spec_constants.h; they also take the
+// scene switches of the path tracer (kSpecHasSpheres ... kSpecRayEpsilon, same ids). Every
 // photon buffer is reached by device address, so none is bound by the 128 MiB binding limit; the
 // gather also binds the sorted photons as a texel buffer (photon_gather.glsl).
 SHADER_NAMESPACE_BEGIN
-
-CONST uint kSpecPhotonEstimator = 48u;   // kPhotonBiased or kPhotonUnbiased
-CONST uint kSpecPhotonKernel = 49u;      // kKernelCone, kKernelUniform, kKernelEpanechnikov
-CONST uint kSpecPhotonSchedule = 50u;    // kLevelSchedulePerPixel or kLevelScheduleUniform: how block levels are drawn
-CONST uint kSpecPhotonGatherCount = 51u; // k > 0: the k nearest photons within the radius (Tungsten's gather_photon_count)
-CONST uint kSpecPhotonRadianceScaling = 52u;  // 1; 0 only in tests: no 1/eta^2 on the camera side at refraction (a control)
-CONST uint kSpecPhotonNextEvent = 53u;   // direct light by next-event estimation, not photons
-CONST uint kSpecGridStage = 54u;         // hash_grid_build: which stage this pipeline runs
-CONST uint kSpecPhotonMaxBounces = 55u;  // scattering vertices of a photon path / camera chain
-CONST uint kSpecPhotonTestCosine = 57u;  // 0; 1 only in tests: glossy gathers weight photons by f |cos| (a control)
-CONST uint kSpecSortedTexels = 56u;      // gatherPhotons reads the sorted photons as texels (1) or by address (0)
-
-
 
 // The counts are zero before the count stage: the host clears them once, when it allocates them,
 // and the scan zeroes each count as it reads it, for the next pass.
@@ -319,6 +262,14 @@ CONST uint kGridStageScan = 1u;     // exclusive scan of kScanBlock-element bloc
 CONST uint kGridStageAdd = 2u;      // adds the scanned block totals back
 CONST uint kGridStageScatter = 3u;  // sorted[cellStart[h]++] = photon (a copy, read in order by the gather)
 CONST uint kGridStageQuery = 4u;    // kernel sums at query points (tests)
+// hash_grid_build's bindings: the photon arrays as texels (read) and storage texels (written);
+// stages built without them (kSpecSortedTexels off) reach the arrays by address.
+CONST uint kGridBindingSortedTexels = 0u;  // the sorted photons (query stage)
+CONST uint kGridBindingPhotonTexels = 1u;  // the photons as traced (scatter stage)
+CONST uint kGridBindingSortedImage = 2u;   // the sorted photons, written by the scatter
+CONST uint kGridBindingCountImage = 3u;    // bucket counts
+CONST uint kGridBindingStartImage = 4u;    // bucket starts (ends after the scatter)
+CONST uint kGridBindingCount = 5u;
 
 // The gather's bindings: the scene's (kSceneBindingCount), the sorted photons as a uniform texel
 // buffer (photon_gather.glsl) in the media's place (photon mapping scenes have no media).
@@ -347,9 +298,9 @@ CONST uint kGatherSliceNearestPhotons = 512u;
 FN uint gatherSlicePhotons(uint gatherCount) {
     return gatherCount > 0u ? kGatherSliceNearestPhotons : kGatherSlicePhotons;
 }
-// The slice length the gather and the query stage are built with (photon_gather.glsl): the host's
-// PhotonMap::sliceLength, gatherSlicePhotons unless a test lowers it.
-CONST uint kSpecGatherSliceLength = 58u;
+// The slice length the gather and the query stage are built with (photon_gather.glsl,
+// kSpecGatherSliceLength): the host's PhotonMap::sliceLength, gatherSlicePhotons unless a test
+// lowers it.
 
 // A stored photon: where it landed, where it came from (octahedral, 2 x snorm16) and its power
 // (flux per emitted path of the pass).
@@ -433,5 +384,8 @@ static_assert(sizeof(telescope::shader::PhotonTracePush) == 48);
 static_assert(sizeof(telescope::shader::HashGridPush) == 64);
 static_assert(sizeof(telescope::shader::GatherPush) == 128);
 #endif
+
+// Last: the table's defaults name the constants above.
+#include "shared/spec_constants.h"
 
 #endif

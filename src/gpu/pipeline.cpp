@@ -27,6 +27,12 @@ uint32_t specFloat(float f) {
     return u;
 }
 
+float floatOfSpec(uint32_t bits) {
+    float f;
+    std::memcpy(&f, &bits, 4);
+    return f;
+}
+
 std::string shaderDirectory() {
     if (const char* dir = std::getenv("TELESCOPE_SHADER_DIR"); dir && *dir) return dir;
     return TELESCOPE_SHADER_DIR;

@@ -24,6 +24,7 @@ struct SpecConstant {
     uint32_t value;  // bools as 0/1; floats by bit pattern (see specFloat)
 };
 uint32_t specFloat(float f);
+float floatOfSpec(uint32_t bits);  // specFloat's inverse
 
 // Directory holding the compiled .spv files: $TELESCOPE_SHADER_DIR, else the build tree's.
 std::string shaderDirectory();

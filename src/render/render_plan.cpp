@@ -21,6 +21,24 @@ std::string pmfDescription(const PmfSettings& pmf) {
 
 uint32_t filterConstant(const Camera& camera) { return uint32_t(camera.filter); }
 
+std::string describeSpecialisation(const std::vector<gpu::SpecConstant>& spec) {
+    std::vector<gpu::SpecConstant> sorted = spec;
+    std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+    std::string s;
+    for (const gpu::SpecConstant& c : sorted) {
+        const shader::SpecConstantInfo* row = shader::specConstantInfo(c.id);
+        if (!row) throw std::logic_error(fmt::format("specialisation constant {} is not in shared/spec_constants.h", c.id));
+        const std::string type = row->type;
+        std::string value;
+        if (type == "bool") value = c.value ? "true" : "false";
+        else if (type == "float") value = fmt::format("{:g}", gpu::floatOfSpec(c.value));
+        else if (c.value == 0xffffffffu) value = "0xffffffff";
+        else value = fmt::format("{}", c.value);
+        s += fmt::format("  {:<2} {:<19} {:<10} {}\n", c.id, row->name, value, row->why);
+    }
+    return s;
+}
+
 RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f, uint32_t pilotLevel, PilotKind pilotKind) {
     RenderPlan plan;
     if (pilotLevel != kNoPilotLevel && usesPhotons(scene.integrator))
@@ -61,6 +79,13 @@ std::string describePlan(const Scene& scene, const RenderPlan& plan) {
     s += fmt::format("compiled into the {} pipeline{}:\n", plan.featuresOf,
                      plan.featuresOf.find(' ') == std::string::npos ? "" : "s");
     for (const auto& f : plan.features) s += fmt::format("  {:<16} {:<4} {}\n", f.name, f.on ? "on" : "off", f.why);
+    // The values themselves, named by the table of shader features (shared/spec_constants.h).
+    if (!plan.pathTraceSpec.empty())
+        s += fmt::format("specialisation of {} (the scene's values; a device may change the loop budget and the "
+                         "scene's bindings):\n{}",
+                         plan.pathTraceShader, describeSpecialisation(plan.pathTraceSpec));
+    if (!plan.photonSpec.empty())
+        s += fmt::format("specialisation of photon_trace and gather (as above):\n{}", describeSpecialisation(plan.photonSpec));
     if (!scene.ignoredKeys.empty()) {
         s += "ignored scene keys:\n";
         for (const auto& k : scene.ignoredKeys) {

@@ -65,6 +65,11 @@ std::string describePlan(const Scene& scene, const RenderPlan& plan);
 
 std::string pmfDescription(const PmfSettings& pmf);
 
+// A pipeline's specialisation constants, one line each (id, name, value, why) from the table of
+// shader features (shared/spec_constants.h), in id order; throws std::logic_error for an id the
+// table lacks.
+std::string describeSpecialisation(const std::vector<gpu::SpecConstant>& spec);
+
 // The reconstruction filter as the camera passes see it (kFilter*).
 uint32_t filterConstant(const Camera& camera);
 
