@@ -508,6 +508,13 @@ TEST_F(Cli, DerivativePlanAndMetadata) {
                   out("b.ckpt")).exitCode, 0);
     ASSERT_EQ(run("render " + d + " --spp 5 -o " + out("c.exr") + " --checkpoint " + out("c.ckpt")).exitCode, 0);
     EXPECT_TRUE(telescope::test::sameSums(loadCheckpoint(out("b.ckpt")).film, loadCheckpoint(out("c.ckpt")).film));
+    // Resuming compares the settings as run (the derivative's too) and names the key that differs.
+    CommandResult step = run("render " + d + " --step 0.01 --spp 1 -o " + out("s.exr") + " --resume " + out("a.ckpt"));
+    EXPECT_EQ(step.exitCode, 2) << step.stderrText;
+    EXPECT_NE(step.stderrText.find("derivative.step"), std::string::npos) << step.stderrText;
+    CommandResult levels = run("render " + d + " --derivative-levels 6 --spp 1 -o " + out("s.exr") + " --resume " + out("a.ckpt"));
+    EXPECT_EQ(levels.exitCode, 2) << levels.stderrText;
+    EXPECT_NE(levels.stderrText.find("derivative.level"), std::string::npos) << levels.stderrText;
     // `reference --derivative` continues from its checkpoint when run again.
     for (int i = 0; i < 2; ++i)
         ASSERT_EQ(run("reference " + d + " --spp 2 -o " + out("ref.exr")).exitCode, 0);

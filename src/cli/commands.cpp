@@ -200,16 +200,24 @@ int runDerivativeRender(const CommonOptions& common, const RenderOptions& option
     keepCheckpointsOnFailure({output.checkpointPath, o.resumePath});
     gpu::Context context(contextOptions(common));
     DerivativeRenderer renderer(context, scene, settings, o.seed);
+    const std::string settingsNow = derivativeSettingsAsRun(scene, renderer);
     if (resume) {
-        if (resume->estimator != renderer.description())
+        // Compared on the settings as run (a key that differs is named); checkpoints that do not
+        // record the derivative's settings (older ones) by the estimator's description.
+        if (resume->settings.find("\"derivative\"") != std::string::npos) {
+            if (resume->settings != settingsNow)
+                throw InputError(o.resumePath, firstDifference(resume->settings, settingsNow),
+                                 "checkpoint was rendered with other settings than this derivative render resolves");
+        } else if (resume->estimator != renderer.description()) {
             throw InputError(o.resumePath, "", fmt::format("checkpoint was rendered with another estimator ({}) than this one ({})",
                                                            resume->estimator, renderer.description()));
+        }
         renderer.resume(resume->film);
     }
     if (!common.quiet) fmt::print(stderr, "{}", renderer.planText());
     const DerivativeParameter& p = renderer.parameter();
-    OutputInfo info{scene.path, scene.document.dump(), renderer.description(), context.info().name,
-                    resolvedSettings(scene).dump(), o.seed, 0.0};
+    OutputInfo info{scene.path, scene.document.dump(), renderer.description(), context.info().name, settingsNow,
+                    o.seed, 0.0};
     info.extra = derivativeMetadata(renderer);
 
     RenderRequest request;

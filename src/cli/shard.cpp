@@ -26,6 +26,22 @@ using namespace session;  // the session layer: loading, outputs, checks
 
 namespace {
 
+// A checkpoint's settings (OutputInfo::settings) split into the scene's (resolvedSettings) and a
+// derivative render's "derivative" object (null for a radiance render).
+struct SettingsParts {
+    std::string scene;
+    nlohmann::json derivative;
+};
+SettingsParts splitDerivativeSettings(const std::string& settings) {
+    if (settings.empty()) return {settings, nullptr};
+    nlohmann::json j = nlohmann::json::parse(settings, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || !j.contains("derivative")) return {settings, nullptr};
+    SettingsParts parts{"", j["derivative"]};
+    j.erase("derivative");
+    parts.scene = j.dump();
+    return parts;
+}
+
 // The merge's note on a checkpoint whose block in progress it leaves out.
 std::string blockLeftOut(const std::string& path, const std::string& block) {
     return path + ": " + block + " is not in the merge; resume that render to finish it, then merge again";
@@ -330,9 +346,19 @@ int runShardMerge(const ShardMergeOptions& optionsIn) {
         if (c.scene != plan.scene)
             throw InputError(path, firstDifference(plan.scene, c.scene),
                              fmt::format("renders another scene than {}", planPath(o.dir)));
-        if (c.settings != plan.settings)
-            throw InputError(path, firstDifference(plan.settings, c.settings),
+        // A derivative shard records its derivative's settings as run too (h_0, the level pmf: the
+        // renderer resolves them); the plan holds the scene's settings and the derivative's options.
+        const SettingsParts parts = splitDerivativeSettings(c.settings);
+        if (parts.scene != plan.settings)
+            throw InputError(path, firstDifference(plan.settings, parts.scene),
                              fmt::format("was rendered with other settings than {}", planPath(o.dir)));
+        if (!plan.derivative.key.empty() &&
+            (parts.derivative.is_null() || parts.derivative.value("key", "") != plan.derivative.key ||
+             parts.derivative.value("estimator", "") != plan.derivative.estimator ||
+             parts.derivative.value("levels", 0u) != plan.derivative.levels))
+            throw InputError(path, "derivative",
+                             fmt::format("is not a derivative render of '{}' with the estimator and levels of {}",
+                                         plan.derivative.key, planPath(o.dir)));
         if (c.seeds != std::vector<uint32_t>{plan.baseSeed + task})
             throw InputError(path, "", fmt::format("holds seed(s) {}, not shard {}'s seed {}", seedList(c.seeds), task,
                                                    plan.baseSeed + task));

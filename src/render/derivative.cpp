@@ -55,23 +55,12 @@ PmfSettings DerivativeSettings::defaultDerivativePmf() {
     return p;
 }
 
-const char* derivativeEstimatorName(DerivativeEstimator e) {
-    switch (e) {
-    case DerivativeEstimator::Forward: return "forward";
-    case DerivativeEstimator::Central: return "central";
-    case DerivativeEstimator::SingleTerm: return "single_term";
-    case DerivativeEstimator::Sum: return "sum";
-    case DerivativeEstimator::Progressive: return "progressive";
-    }
-    return "?";
-}
+const char* derivativeEstimatorName(DerivativeEstimator e) { return nameOf(kDerivativeEstimatorNames, e); }
 
 DerivativeEstimator parseDerivativeEstimator(const std::string& name, const std::string& option) {
-    for (auto e : {DerivativeEstimator::Forward, DerivativeEstimator::Central, DerivativeEstimator::SingleTerm,
-                   DerivativeEstimator::Sum, DerivativeEstimator::Progressive})
-        if (name == derivativeEstimatorName(e)) return e;
-    throw InputError("", option,
-                     fmt::format("unknown derivative estimator '{}' (forward, central, single_term, sum, progressive)", name));
+    if (const auto e = valueOf(kDerivativeEstimatorNames, name)) return *e;
+    throw InputError("", option, fmt::format("unknown derivative estimator '{}' (expected {})", name,
+                                             expectedNames(kDerivativeEstimatorNames)));
 }
 
 double defaultDerivativeStep(double theta, const std::string& key, double size) {

@@ -32,11 +32,18 @@
 #include "gpu/context.h"
 #include "render/film.h"
 #include "render/renderer.h"
+#include "scene/enum_names.h"
 #include "scene/scene.h"
 
 namespace telescope {
 
 enum class DerivativeEstimator : uint32_t { Forward, Central, SingleTerm, Sum, Progressive };
+inline constexpr Named<DerivativeEstimator> kDerivativeEstimatorNames[] = {
+    {DerivativeEstimator::Forward, "forward"},
+    {DerivativeEstimator::Central, "central"},
+    {DerivativeEstimator::SingleTerm, "single_term"},
+    {DerivativeEstimator::Sum, "sum"},
+    {DerivativeEstimator::Progressive, "progressive"}};
 
 const char* derivativeEstimatorName(DerivativeEstimator e);
 // Throws InputError naming `option` for an unknown name.

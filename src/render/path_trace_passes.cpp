@@ -230,10 +230,7 @@ public:
                     uint32_t seed)
         : pipeline_(context, plan.pathTraceShader, shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
                     deviceSceneSpec(context, plan.pathTraceSpec, b), kPathTraceUniformBindings, kSceneTexelBindings) {
-        pipeline_.bindBuffers({b.prims, b.nodes, b.materials, b.lights, b.media, b.gridData, b.primMedia, b.nodes, b.prims,
-                               b.textures, b.environment, b.materials, b.lights, b.media, b.shadingNormals,
-                               b.texels(context, b.nodes), b.texels(context, b.prims),
-                               b.texels(context, b.shadingNormals)});
+        pipeline_.bindBuffers(b.sceneBindings(context, true));
         for (const auto& s : plan.pathTraceSpec)
             if (s.id == shader::kSpecLoopBudget && s.value != 0) loopBudget_ = deviceLoopBudget(context);
         const Camera& cam = scene.camera;

@@ -33,23 +33,31 @@ PhotonMap::PhotonMap(gpu::Context& context, uint64_t capacity) : context_(contex
     allocate(std::max<uint64_t>(capacity, 1));
 }
 
-// hash_grid_build's bindings (hash_grid_build.comp): 0 the sorted photons, 1 the photons as texels;
-// 2 the sorted photons, 3 the bucket counts, 4 the bucket starts as storage texels.
-// kSpecSortedTexels says whether the stages use them or reach the arrays by address.
+// hash_grid_build's bindings (kGridBinding*, shared/gpu_types.h): the photon arrays as texels and
+// storage texels. kSpecSortedTexels says whether the stages use them or reach the arrays by address.
 gpu::PipelineDesc PhotonMap::stageDesc(uint32_t stage, bool texels, uint32_t kernel, uint32_t gatherCount) {
     using namespace shader;
-    constexpr uint32_t kTexels = (1u << 0) | (1u << 1), kStorageTexels = (1u << 2) | (1u << 3) | (1u << 4);
-    return {"hash_grid_build", 5, uint32_t(sizeof(HashGridPush)),
+    constexpr uint32_t kTexels = (1u << kGridBindingSortedTexels) | (1u << kGridBindingPhotonTexels);
+    constexpr uint32_t kStorageTexels =
+        (1u << kGridBindingSortedImage) | (1u << kGridBindingCountImage) | (1u << kGridBindingStartImage);
+    return {"hash_grid_build", kGridBindingCount, uint32_t(sizeof(HashGridPush)),
             {{kSpecGridStage, stage}, {kSpecPhotonKernel, kernel}, {kSpecSortedTexels, texels},
              {kSpecPhotonGatherCount, gatherCount}, {kSpecGatherSliceLength, sliceLength(gatherCount)}},
             0, kTexels, kStorageTexels};
 }
 
 void PhotonMap::bindStage(gpu::ComputePipeline& pipeline, bool texels) const {
-    // Without texels the bindings only need some buffer.
-    const gpu::Buffer* stand = &header_;
-    pipeline.bindBuffers({texels ? &sorted_ : stand, texels ? &photons_ : stand, texels ? &sorted_ : stand,
-                          texels ? &cellCount_ : stand, texels ? &cellStart_ : stand});
+    using namespace shader;
+    // Stages without texels read no binding: every slot then holds the header, some valid buffer.
+    std::vector<const gpu::Buffer*> list(kGridBindingCount, &header_);
+    if (texels) {
+        list[kGridBindingSortedTexels] = &sorted_;
+        list[kGridBindingPhotonTexels] = &photons_;
+        list[kGridBindingSortedImage] = &sorted_;
+        list[kGridBindingCountImage] = &cellCount_;
+        list[kGridBindingStartImage] = &cellStart_;
+    }
+    pipeline.bindBuffers(list);
 }
 
 void PhotonMap::allocate(uint64_t capacity) {

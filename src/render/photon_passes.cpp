@@ -209,12 +209,7 @@ public:
                            (shader::kGatherBlockVec4s + (scene.integrator.photon.gatherCount + 1) / 2) * 16,
                        "gather blocks") {
         blockBuffer_.fill(0);
-        // Bindings 4-6 and 13 (the media in the path tracer) are declared by neither shader: any
-        // buffer will do (the gather binds its texels at 4).
-        scene_ = {b.prims,    b.nodes,    b.materials,   b.lights,    b.lights, b.lights,
-                  b.lights,   b.nodes,    b.prims,       b.textures,  b.environment, b.materials,
-                  b.lights,   b.lights,   b.shadingNormals, b.texels(context, b.nodes), b.texels(context, b.prims),
-                  b.texels(context, b.shadingNormals)};
+        scene_ = b.sceneBindings(context, false);
         trace_.bindBuffers(scene_);
         gatherTexels_ = map_.texelsFit();  // as the gather pipeline was created
         bindGather();

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 #include "gpu/buffer.h"
@@ -74,6 +75,35 @@ struct RenderBuffers {
     // table (kUniformSceneBytes: 4096 texels, within every device's limit of at least 65536).
     const gpu::Buffer* texels(const gpu::Context& context, const gpu::Buffer* b) const {
         return sceneTexelsFit(context) ? b : lights;
+    }
+    // The scene's bindings of path_trace, photon_trace and gather, each slot by its name
+    // (shared/gpu_types.h kBinding*). The photon passes declare no media (withMedia false): their
+    // slots hold the light table, a valid buffer no shader reads (the gather binds its photons'
+    // texels at kBindingSortedTexels = kBindingMedia itself).
+    std::vector<const gpu::Buffer*> sceneBindings(const gpu::Context& context, bool withMedia) const {
+        using namespace shader;
+        std::vector<const gpu::Buffer*> list(kPathTraceBindingCount, nullptr);
+        list[kBindingPrims] = prims;
+        list[kBindingBvh] = nodes;
+        list[kBindingMaterials] = materials;
+        list[kBindingLights] = lights;
+        list[kBindingMedia] = withMedia ? media : lights;
+        list[kBindingGridData] = withMedia ? gridData : lights;
+        list[kBindingPrimMedia] = withMedia ? primMedia : lights;
+        list[kBindingBvhUniform] = nodes;
+        list[kBindingPrimsUniform] = prims;
+        list[kBindingTextures] = textures;
+        list[kBindingEnvironment] = environment;
+        list[kBindingMaterialsUniform] = materials;
+        list[kBindingLightsUniform] = lights;
+        list[kBindingMediaUniform] = withMedia ? media : lights;
+        list[kBindingShadingNormals] = shadingNormals;
+        list[kBindingBvhTexels] = texels(context, nodes);
+        list[kBindingPrimsTexels] = texels(context, prims);
+        list[kBindingShadingNormalTexels] = texels(context, shadingNormals);
+        for (const gpu::Buffer* bound : list)
+            if (!bound) throw std::logic_error("a scene binding without a buffer");
+        return list;
     }
 };
 

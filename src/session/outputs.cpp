@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -11,6 +12,8 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "scene/enum_names.h"
+#include "scene/settings_json.h"
 #include "render/image_output.h"
 #include "scene/scene_loader.h"
 
@@ -59,7 +62,8 @@ DerivativeSettings derivativeSettings(const DerivativeOptions& d) {
             throw InputError("", "--derivative-pmf", fmt::format("'{}' is not JSON", d.pmf));
         }
         const std::string type = j.is_object() && j.contains("type") && j["type"].is_string() ? j["type"].get<std::string>() : "";
-        if (type == "auto") {
+        const std::optional<PmfType> pmfType = valueOf(kPmfTypeNames, type);
+        if (pmfType == PmfType::Auto) {
             for (const auto& [k, v] : j.items())
                 if (k != "type" && k != "pilot_spp")
                     throw InputError("", "--derivative-pmf", fmt::format("unknown key \"{}\" of the auto pmf", k));
@@ -83,10 +87,10 @@ DerivativeSettings derivativeSettings(const DerivativeOptions& d) {
         for (const auto& [k, v] : j.items())
             if (k != "type" && k != "r" && k != "alpha")
                 throw InputError("", "--derivative-pmf", fmt::format("unknown key \"{}\"", k));
-        if (type == "geometric") {
+        if (pmfType == PmfType::Geometric) {
             s.pmf.type = PmfType::Geometric;
             s.pmf.r = number("r");
-        } else if (type == "power_law") {
+        } else if (pmfType == PmfType::PowerLaw) {
             s.pmf.type = PmfType::PowerLaw;
             s.pmf.alpha = number("alpha");
         } else {
@@ -104,6 +108,24 @@ std::vector<std::pair<std::string, std::string>> derivativeMetadata(const Deriva
             {"telescope:derivative_value", fmt::format("{:.17g}", p.value)},
             {"telescope:derivative_step", fmt::format("{:.17g}", p.step)},
             {"telescope:derivative_estimator", derivativeEstimatorName(r.settings().estimator)}};
+}
+
+std::string derivativeSettingsAsRun(const Scene& scene, const DerivativeRenderer& r) {
+    const DerivativeParameter& p = r.parameter();
+    const DerivativeSettings& d = r.settings();
+    nlohmann::json j = resolvedSettings(scene);
+    nlohmann::json& dj = j["derivative"];
+    dj["key"] = p.key;
+    dj["value"] = p.value;
+    dj["step"] = p.step;
+    dj["estimator"] = derivativeEstimatorName(d.estimator);
+    dj["levels"] = d.levels;
+    if (d.estimator == DerivativeEstimator::SingleTerm || d.estimator == DerivativeEstimator::Sum) {
+        std::vector<double> pmf;
+        for (uint32_t level = 0; level < d.levels; ++level) pmf.push_back(r.levelProbability(level));
+        dj["pmf"] = pmf;  // P(J = j), j < levels (after "levels" in key order: that difference is named first)
+    }
+    return j.dump();
 }
 
 void reportIgnoredKeys(const Scene& scene, bool quiet) {

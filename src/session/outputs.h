@@ -31,6 +31,11 @@ void reportIgnoredKeys(const Scene& scene, bool quiet);
 DerivativeSettings derivativeSettings(const DerivativeOptions& d);
 // A derivative render's EXR metadata beyond OutputInfo's (the parameter, its value, h_0).
 std::vector<std::pair<std::string, std::string>> derivativeMetadata(const DerivativeRenderer& r);
+// The settings a derivative render runs with, as its outputs record them (OutputInfo::settings):
+// resolvedSettings(scene) plus a "derivative" object (key, value, h_0, estimator, levels, and the
+// level pmf as run, p(j) for each level: the pilot's table where pmf "auto" chose it). Resuming
+// compares these; a shard merge compares the scene's part with its plan.
+std::string derivativeSettingsAsRun(const Scene& scene, const DerivativeRenderer& r);
 gpu::ContextOptions contextOptions(const CommonOptions& o);
 
 // Throw InputError naming the option when a path has the wrong extension or no directory.

@@ -16,6 +16,7 @@
 #include "shared/transmittance_estimators.h"
 #include "shared/transmittance_study.h"
 #include "core/atomic_file.h"
+#include "scene/enum_names.h"
 
 namespace fs = std::filesystem;
 
@@ -55,16 +56,20 @@ struct EstimatorSpec {
     bool exponentialOnly;
 };
 
+// Every transmittance estimator, named by the scene file's table (scene/enum_names.h); the trackers
+// and Kettunen et al.'s unbiased marching need an exponential model.
 const std::vector<EstimatorSpec>& estimators() {
-    static const std::vector<EstimatorSpec> list = {
-        {"ray_march", shader::kTrEstRayMarch, false},
-        {"debiased_ray_march", shader::kTrEstDebiasedRayMarch, false},
-        {"delta_tracking", shader::kTrEstDeltaTracking, true},
-        {"ratio_tracking", shader::kTrEstRatioTracking, true},
-        {"residual_ratio_tracking", shader::kTrEstResidualRatioTracking, true},
-        {"unbiased_ray_march", shader::kTrEstUnbiasedRayMarch, true},
-        {"taylor", shader::kTrEstTaylor, false},
-    };
+    static const std::vector<EstimatorSpec> list = [] {
+        std::vector<EstimatorSpec> l;
+        for (const auto& [value, name] : kTransmittanceEstimatorNames) {
+            const uint32_t type = uint32_t(value);
+            const bool exponentialOnly = type == shader::kTrEstDeltaTracking || type == shader::kTrEstRatioTracking ||
+                                         type == shader::kTrEstResidualRatioTracking ||
+                                         type == shader::kTrEstUnbiasedRayMarch;
+            l.push_back({name, type, exponentialOnly});
+        }
+        return l;
+    }();
     return list;
 }
 

@@ -387,7 +387,8 @@ private:
         const Film film = this->film();
         session::OutputInfo info{scene_->path,         scene_->document.dump(),
                              derivative_ ? derivative_->description() : renderer_->plan().estimator,
-                             context_.info().name, resolvedSettings(*scene_).dump(),
+                             context_.info().name,
+                             derivative_ ? session::derivativeSettingsAsRun(*scene_, *derivative_) : resolvedSettings(*scene_).dump(),
                              options_.seed,        renderSeconds_};
         if (derivative_) {
             info.extra = session::derivativeMetadata(*derivative_);
