@@ -48,7 +48,7 @@ void photonPass(benchmark::State& state) {
     const RenderStats& after = renderer.stats();
     const double passes = double(state.iterations());
     auto ms = [&](const char* pass) { return (after.passes.at(pass).gpuMs - before.passes.at(pass).gpuMs) / passes; };
-    const double stored = double(after.photonsStored - before.photonsStored) / passes;
+    const double stored = double(after.integrator.photonsStored - before.integrator.photonsStored) / passes;
     auto& row = gPassRows[n];
     row["trace_ms"] = ms("photon_trace");
     row["grid_ms"] = ms("hash_grid_build");
@@ -58,7 +58,7 @@ void photonPass(benchmark::State& state) {
     row["stored_per_s"] = stored / (row["trace_ms"] * 1e-3);
     row["grid_photons_per_s"] = stored / (row["grid_ms"] * 1e-3);
     row["gathers_per_s"] = 64.0 * 64.0 / (row["gather_ms"] * 1e-3);
-    row["bytes_per_photon"] = double(after.photonMapBytes) / stored;
+    row["bytes_per_photon"] = double(after.integrator.photonMapBytes) / stored;
     for (const auto& [k, v] : row) state.counters[k] = v;
     state.SetLabel(context().info().name);
 }
@@ -144,7 +144,7 @@ void budgetConvergence(benchmark::State& state, std::string label, std::string i
                 RenderRequest one;
                 one.spp = 1;
                 renderer.render(one);
-                const uint64_t passes = renderer.stats().photonPasses;
+                const uint64_t passes = renderer.stats().integrator.photonPasses;
                 const bool record = passes >= res.budgets[next].budget;
                 if (!record && !blocks) continue;
                 Film film = renderer.film();
@@ -166,7 +166,7 @@ void budgetConvergence(benchmark::State& state, std::string label, std::string i
                 }
             }
             res.seconds += renderer.stats().wallSeconds;
-            res.passes += renderer.stats().photonPasses;
+            res.passes += renderer.stats().integrator.photonPasses;
             res.samples += renderer.stats().samplesPerPixel;
         }
     }

@@ -90,7 +90,7 @@ Batches renderBatches(const Scene& scene, uint32_t batches, uint32_t samplesPerB
             corrBefore[r] = cs;
         }
     }
-    out.passes = renderer.stats().photonPasses;
+    out.passes = renderer.stats().integrator.photonPasses;
     out.samples = renderer.stats().samplesPerPixel;
     return out;
 }
@@ -227,7 +227,7 @@ TEST_F(PhotonRender, NextEventDirectLightMatchesThePlaneWithoutPhotonsAtTheFirst
     RenderRequest request;
     request.spp = 16;
     renderer.render(request);
-    EXPECT_EQ(renderer.stats().photonsStored, 0u);
+    EXPECT_EQ(renderer.stats().integrator.photonsStored, 0u);
     const std::vector<double> want = analyticRegions();
     auto regions = blockMeans(renderer.film(), kBlock);
     for (size_t r = 0; r < want.size(); ++r) EXPECT_NEAR(regions[r].mean.x, want[r], 0.02 * want[r]) << "region " << r;
@@ -291,7 +291,7 @@ TEST_F(PhotonRender, SixteenMillionPhotons) {
     RenderRequest request;
     request.spp = 1;
     renderer.render(request);
-    EXPECT_GE(renderer.stats().photonsStored, 16u << 20);
+    EXPECT_GE(renderer.stats().integrator.photonsStored, 16u << 20);
     Film film = renderer.film();
     const std::vector<double> want = analyticRegions();
     auto regions = blockMeans(film, kBlock);
@@ -390,7 +390,7 @@ TEST_F(PhotonRender, PhotonsReadByAddressGiveTheSameFilm) {
     RenderRequest request;
     request.spp = 3;
     texels.render(request);
-    ASSERT_GT(texels.stats().photonsStored, uint64_t(3 * paths)) << "the photon map must outgrow its first capacity";
+    ASSERT_GT(texels.stats().integrator.photonsStored, uint64_t(3 * paths)) << "the photon map must outgrow its first capacity";
 
     const std::string limit = std::to_string(2 * paths);  // texels of `paths` photons
     ASSERT_EQ(setenv("TELESCOPE_MAX_TEXELS", limit.c_str(), 1), 0);
@@ -441,7 +441,7 @@ Film resumedFilm(const Scene& scene, uint32_t seed, const Film& film, uint64_t s
     RenderRequest request;
     request.spp = spp - restored.samplesPerPixel();
     renderer.render(request);
-    if (passes) *passes = renderer.stats().photonPasses;
+    if (passes) *passes = renderer.stats().integrator.photonPasses;
     return renderer.film();
 }
 
@@ -482,7 +482,7 @@ TEST_F(PhotonRender, AnInterruptedBlockResumesWhereItStopped) {
     std::printf("two uninterrupted renders differ by %.3g, the resumed one by %.3g (tolerance %.3g)\n", rounding,
                 largestRelativeDifference(resumed, wholeFilm, floor), tolerance);
     EXPECT_LT(largestRelativeDifference(resumed, wholeFilm, floor), tolerance);
-    EXPECT_EQ(passes + p.unitsDone, whole.stats().photonPasses) << "passes traced twice or skipped";
+    EXPECT_EQ(passes + p.unitsDone, whole.stats().integrator.photonPasses) << "passes traced twice or skipped";
 
     Film lostSums = part;
     PendingSamples zeroed = part.pending();
@@ -494,7 +494,7 @@ TEST_F(PhotonRender, AnInterruptedBlockResumesWhereItStopped) {
     dropped.setPending({});
     uint64_t droppedPasses = 0;
     EXPECT_LT(largestRelativeDifference(resumedFilm(scene, seed, dropped, blocks, &droppedPasses), wholeFilm, floor), tolerance);
-    EXPECT_EQ(droppedPasses, whole.stats().photonPasses) << "dropping the block retraces its passes";
+    EXPECT_EQ(droppedPasses, whole.stats().integrator.photonPasses) << "dropping the block retraces its passes";
 
     // A block that is not this render's (another seed draws another level for block 0) is refused.
     uint32_t other = seed + 1;

@@ -153,11 +153,11 @@ void writeStatsJson(const std::string& path, const Scene& scene, const gpu::Cont
                   {"warm_up_seconds", stats.warmUpSeconds}};
     j["submits"] = stats.submits;
     j["paths_per_second"] = stats.wallSeconds > 0 ? paths / stats.wallSeconds : 0.0;
-    if (stats.photonPaths > 0) {
-        j["photon_paths"] = stats.photonPaths;
-        j["photons_stored"] = stats.photonsStored;
-        j["photon_passes"] = stats.photonPasses;
-        if (stats.samplesPerPixel > 0) j["photon_passes_per_sample"] = double(stats.photonPasses) / double(stats.samplesPerPixel);
+    if (stats.integrator.photonPaths > 0) {
+        j["photon_paths"] = stats.integrator.photonPaths;
+        j["photons_stored"] = stats.integrator.photonsStored;
+        j["photon_passes"] = stats.integrator.photonPasses;
+        if (stats.samplesPerPixel > 0) j["photon_passes_per_sample"] = double(stats.integrator.photonPasses) / double(stats.samplesPerPixel);
     }
     j["non_finite_samples"] = film.nonFiniteSamples();
     j["loop_budget"] = {{"cap_hits", stats.loops.capHits},
@@ -568,9 +568,9 @@ double measurePhotonPassSeconds(gpu::Context& context, const Scene& scene) {
     };
     passes(2);
     const double seconds = renderer.stats().wallSeconds;
-    const uint64_t done = renderer.stats().photonPasses;
+    const uint64_t done = renderer.stats().integrator.photonPasses;
     passes(8);
-    const uint64_t measured = renderer.stats().photonPasses - done;
+    const uint64_t measured = renderer.stats().integrator.photonPasses - done;
     return measured ? (renderer.stats().wallSeconds - seconds) / double(measured) : 0.0;
 }
 

@@ -351,14 +351,18 @@ public:
         blockBuffer_.upload(p.device.data(), p.device.size());
     }
 
-    uint64_t photonPathsLastBatch() const override { return tracePush_.pathCount; }
     LoopStats loopStats() const override {
         LoopStats s;
         s.capHits = loopCapHits_;
         return s;
     }
-    uint64_t photonsStoredLastBatch() const override { return lastStored_; }
-    uint64_t deviceBytes() const override { return map_.deviceBytes() + blockBuffer_.size(); }
+    void countBatch(IntegratorCounters& c, uint32_t units) const override {
+        // One unit (a photon pass) per batch (maxUnitsPerBatch).
+        c.photonPaths += tracePush_.pathCount;
+        c.photonPasses += units;
+        c.photonsStored += lastStored_;
+        c.photonMapBytes = map_.deviceBytes() + blockBuffer_.size();
+    }
 
     void recordWarmUp(gpu::CommandBatch& batch) override {
         map_.recordWarmUp(batch);

@@ -230,15 +230,15 @@ PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t
     s.integrator.debias.estimator = DebiasEstimator::SingleTerm;
     s.integrator.debias.pmf = PmfSettings{};
     s.integrator.debias.schedule = LevelSchedule::PerPixel;
-    Renderer r(context, s, seed + 7919u, /*pilotLevel=*/0);
+    Renderer r(context, s, seed + 7919u, PlanOptions{0, PilotKind::PathDepth});
     std::vector<glm::dvec3> weight;
     double pixels = 0.0;
     for (uint32_t m = 0; m < settings.pilotLevels; ++m) {
-        if (m > 0) r.restartAtPilotLevel(m);
+        if (m > 0) r.restartAtFixedLevel(m);
         RenderRequest req;
         req.spp = m == 0 ? std::max<uint32_t>(spp, 2) : spp;  // the base variance needs two samples
         r.render(req);
-        const PilotSums sums = r.pilotSums();
+        const PilotSums sums = r.passes().pilotSums(r.nextSampleIndex());
         const double n = double(sums.samples);
         const size_t pixelCount = sums.sums[shader::kPilotBase].size();
         if (m == 0) {
@@ -301,7 +301,7 @@ PmfPilotResult runTransmittancePmfPilot(gpu::Context& context, const Scene& scen
     }
     s.integrator.russianRoulette = false;  // survival would depend on the weighted correction
     s.integrator.transmittance.pmf = defaultTransmittancePmf();
-    Renderer r(context, s, seed + 7919u, /*pilotLevel=*/0, PilotKind::Transmittance);
+    Renderer r(context, s, seed + 7919u, PlanOptions{0, PilotKind::Transmittance});
     const size_t pixelCount = size_t(s.camera.width) * s.camera.height;
     const double pixels = double(pixelCount);
     std::vector<glm::dvec3> weight(pixelCount), baseSum(pixelCount), baseSq(pixelCount);
@@ -309,11 +309,11 @@ PmfPilotResult runTransmittancePmfPilot(gpu::Context& context, const Scene& scen
     for (uint32_t m = 0; m < levels; ++m) {
         std::fill(d2.begin(), d2.end(), 0.0);
         for (uint32_t i = 0; i < spp; ++i) {
-            r.restartAtPilotLevel(m);
+            r.restartAtFixedLevel(m);
             const std::vector<glm::vec4> once = r.renderSample(i);
             result.pilotGpuSeconds += gpuSeconds(r.stats());
             result.pilotWallSeconds += r.stats().wallSeconds;
-            r.restartAtPilotLevel(m | shader::kTrPilotHalfWeight);
+            r.restartAtFixedLevel(m | shader::kTrPilotHalfWeight);
             const std::vector<glm::vec4> twice = r.renderSample(i);
             result.pilotGpuSeconds += gpuSeconds(r.stats());
             result.pilotWallSeconds += r.stats().wallSeconds;
@@ -331,7 +331,7 @@ PmfPilotResult runTransmittancePmfPilot(gpu::Context& context, const Scene& scen
         }
         // The cost of a path at this level: a batched render, as the real one runs (one sample per
         // dispatch would charge every sample the dispatch overhead).
-        r.restartAtPilotLevel(m);
+        r.restartAtFixedLevel(m);
         RenderRequest req;
         req.spp = spp;
         r.render(req);

@@ -39,6 +39,12 @@ struct FeatureSwitch {
 constexpr uint32_t kNoPilotLevel = 0xffffffffu;
 enum class PilotKind { PathDepth, Transmittance };
 
+// How a plan runs the integrator beyond the scene's settings: the pmf pilots' fixed levels.
+struct PlanOptions {
+    uint32_t pilotLevel = kNoPilotLevel;
+    PilotKind pilotKind = PilotKind::PathDepth;
+};
+
 struct RenderPlan {
     std::vector<PlannedPass> passes;     // in dispatch order, per batch of samples
     std::vector<SkippedPass> skipped;

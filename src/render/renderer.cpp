@@ -17,13 +17,13 @@ double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(
 constexpr uint32_t kMaxDispatchesPerBatch = 64;
 }  // namespace
 
-Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uint32_t pilotLevel, PilotKind pilotKind)
+Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, const PlanOptions& options)
     : context_(context), camera_(scene.camera), integrator_(scene.integrator), seed_(seed) {
     auto start = Clock::now();
     if (*autoPmfKey(scene.integrator) != '\0')
         throw std::logic_error("the auto pmf must be resolved by a pilot (resolveAutoPmf) before rendering");
     gpuScene_ = buildGpuScene(scene);
-    plan_ = makeRenderPlan(scene, gpuScene_.features, pilotLevel, pilotKind);
+    plan_ = makeRenderPlan(scene, gpuScene_.features, options.pilotLevel, options.pilotKind);
     stats_.sceneSeconds = secondsSince(start);
     auto phase = Clock::now();
 
@@ -89,9 +89,7 @@ void SamplePasses::restorePending(const PendingSamples& p, uint64_t) {
 
 uint32_t Renderer::samplesPerUnit() const { return passes_->samplesPerUnit(); }
 
-PilotSums Renderer::pilotSums() const { return passes_->pilotSums(sampleIndex_); }
-
-void Renderer::restartAtPilotLevel(uint32_t level) {
+void Renderer::restartAtFixedLevel(uint32_t level) {
     passes_->setPilotLevel(level);
     accum_.fill(0);
     sampleIndex_ = 0;
@@ -163,10 +161,7 @@ void Renderer::render(const RenderRequest& request) {
         }
         stats_.loops = passes_->loopStats();
         if (!complete) continue;  // nothing was accumulated: run it again
-        stats_.photonPaths += passes_->photonPathsLastBatch();
-        stats_.photonPasses += passes_->photonPathsLastBatch() ? units : 0;
-        stats_.photonsStored += passes_->photonsStoredLastBatch();
-        stats_.photonMapBytes = passes_->deviceBytes();
+        passes_->countBatch(stats_.integrator, units);
         done += batchSamples;
         sampleIndex_ += batchSamples;
 

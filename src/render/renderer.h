@@ -1,8 +1,9 @@
 // Schedules the passes of a plan on the device and accumulates samples into a Film.
 //
-// The integrator contributes its passes (SamplePasses: path_trace, or photon_trace,
-// hash_grid_build and gather); the Renderer batches their units into submits, times every
-// dispatch by name and stops at a sample count or a time limit.
+// The integrator contributes its passes (SamplePasses, render/sample_passes.h); the Renderer
+// batches their units into submits, times every dispatch by name and stops at a sample count or a
+// time limit. It knows no integrator: what one counts beyond samples is IntegratorCounters, and
+// ways of running it that are not scene settings are PlanOptions (render/render_plan.h).
 //
 // A Renderer owns the scene buffers, the accumulation buffer, the pipelines and the camera and
 // integrator settings: the Scene it was made from need not outlive it. render() may be
@@ -40,16 +41,16 @@ struct RenderProgress {
 struct RenderRequest {
     uint64_t spp = 0;          // samples per pixel to add (used when timeLimit is 0)
     double timeLimit = 0.0;    // seconds; renders whole dispatches until it is reached
-    // At the time limit, a sample that takes several units (a photon block) is finished (true: the
-    // render overruns by up to a block, and the block count is a stopping time, so their sum is
-    // unbiased by Wald's identity) or left in progress (false: the render stops at the deadline;
-    // the block stays in film().pending() for a checkpoint; an image of the completed blocks
-    // alone leans towards short, low-level blocks: docs/PHOTON-MAPPING.md "Time limits").
+    // At the time limit, a sample that takes several units (SamplePasses::sampleInProgress) is
+    // finished (true: the render overruns by up to that sample, and the sample count is a stopping
+    // time, so their sum is unbiased by Wald's identity) or left in progress (false: the render
+    // stops at the deadline; the sample stays in film().pending() for a checkpoint; an image of
+    // the completed samples alone leans towards short ones: "Time limits" in the integrator's doc).
     bool finishSampleAtTimeLimit = true;
     std::function<void(const RenderProgress&)> progress;  // called after every batch
-    // Asked before every batch: true ends the render there (a signal). A photon block in
-    // progress stays in film().pending(), so a checkpoint of it resumes the block where it stopped;
-    // every completed sample is in the film.
+    // Asked before every batch: true ends the render there (a signal). A sample in progress
+    // stays in film().pending(), so a checkpoint of it resumes the sample where it stopped; every
+    // completed sample is in the film.
     std::function<bool()> stop;
 };
 
@@ -80,10 +81,7 @@ struct RenderStats {
     double firstSampleSeconds = 0.0;
     uint64_t samplesPerPixel = 0;
     uint64_t submits = 0;
-    uint64_t photonPaths = 0;    // photon mapping: photon paths traced, all passes
-    uint64_t photonPasses = 0;   // photon mapping: photon passes (a block of the unbiased estimator has several)
-    uint64_t photonsStored = 0;  // photon mapping: photons stored, all passes
-    uint64_t photonMapBytes = 0; // photon mapping: device memory of the photon map now
+    IntegratorCounters integrator;  // what the integrator's passes count (render/sample_passes.h)
     // path_trace's loop budget (shared/gpu_types.h): capHits and overlong nonzero mean wrong pixels.
     LoopStats loops;
     std::map<std::string, PassStats> passes;
@@ -91,9 +89,9 @@ struct RenderStats {
 
 class Renderer {
 public:
-    // pilotLevel: the pmf pilot's first fixed level (render_plan.h); kNoPilotLevel for a render.
-    Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, uint32_t pilotLevel = kNoPilotLevel,
-             PilotKind pilotKind = PilotKind::PathDepth);
+    // options: how the plan runs the integrator beyond the scene's settings (render_plan.h); the
+    // default for a render.
+    Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, const PlanOptions& options = {});
     ~Renderer();
 
     const RenderPlan& plan() const { return plan_; }
@@ -103,12 +101,13 @@ public:
     // first render() call.
     void resume(const Film& film);
     Film film() const;  // downloads the accumulation
-    // The pmf pilot only (a Renderer made with a pilot level): starts again from an empty
-    // film at another fixed level, with the same pipelines and the same random numbers (sample
-    // indices restart at 0). Stats restart too, except the setup time.
-    void restartAtPilotLevel(uint32_t level);
-    // The pmf pilot only: its own sums (D_j, D_j^2, the base I(k) and its square, rays traced).
-    PilotSums pilotSums() const;
+    // A Renderer whose plan fixes the level (PlanOptions) only: starts again from an empty film at
+    // another fixed level, with the same pipelines and the same random numbers (sample indices
+    // restart at 0). Stats restart too, except the setup time.
+    void restartAtFixedLevel(uint32_t level);
+    // The integrator's passes, for what only some integrators or plans have (their own sums).
+    const SamplePasses& passes() const { return *passes_; }
+    uint64_t nextSampleIndex() const { return sampleIndex_; }  // the global index of the next sample
     // Starts again from an empty film with another camera of the same resolution and field of
     // view (the viewer's orbit): sample indices restart at 0 and stats restart, except the setup
     // time. No new pipelines. Returns false (and changes nothing) when the integrator cannot

@@ -135,6 +135,14 @@ constexpr uint32_t kSceneTexelBindings = (1u << shader::kBindingBvhTexels) | (1u
 // path_trace's: those, and the media (kSpecTablesInUniforms).
 constexpr uint32_t kPathTraceUniformBindings = kSceneUniformBindings | (1u << shader::kBindingMediaUniform);
 
+// What an integrator counts beyond samples and dispatches (RenderStats::integrator).
+struct IntegratorCounters {
+    uint64_t photonPaths = 0;    // photon mapping: photon paths traced, all passes
+    uint64_t photonPasses = 0;   // photon mapping: photon passes (a block of the unbiased estimator has several)
+    uint64_t photonsStored = 0;  // photon mapping: photons stored, all passes
+    uint64_t photonMapBytes = 0; // photon mapping: device memory of the photon map now
+};
+
 // Loop-budget counters of a render (shared/gpu_types.h kLoopStat*).
 struct LoopStats {
     uint64_t capHits = 0;   // lanes whose invocation reached lavapipe's loop cap: wrong results (an error)
@@ -164,11 +172,11 @@ public:
     virtual bool batchComplete(std::vector<gpu::DispatchTiming>& timings) { (void)timings; return true; }
     // path_trace's loop statistics so far (shared/gpu_types.h kLoopStat*); zero for other passes.
     virtual LoopStats loopStats() const { return {}; }
-    // Photon mapping: photon paths traced and photons stored by the last complete batch.
-    virtual uint64_t photonPathsLastBatch() const { return 0; }
-    virtual uint64_t photonsStoredLastBatch() const { return 0; }
-    // Device memory of the integrator's own buffers (the photon map), in bytes.
-    virtual uint64_t deviceBytes() const { return 0; }
+    // Adds what the last complete batch (`units` units) counted to the render's counters.
+    virtual void countBatch(IntegratorCounters& counters, uint32_t units) const {
+        (void)counters;
+        (void)units;
+    }
     // Empty dispatches of every pipeline: lavapipe compiles a pipeline at its first dispatch.
     virtual void recordWarmUp(gpu::CommandBatch& batch) = 0;
     // The pmf pilot's fixed level (a push constant of a pilot plan); integrators without a pilot
