@@ -267,7 +267,8 @@ const DerivativeRenderer::Version& DerivativeRenderer::version(double delta) {
                                                 "plan and buffer layout",
                                                 delta < 0 ? "-" : "+", std::abs(delta), what));
     };
-    if (plan.pathTraceShader != basePlan.pathTraceShader) refuse("the path tracer's shader");
+    if (plannedEntry(plan, PassKind::PathTrace).shader != plannedEntry(basePlan, PassKind::PathTrace).shader)
+        refuse("the path tracer's shader");
     for (size_t i = 0; i < plan.pathTraceSpec.size() && i < basePlan.pathTraceSpec.size(); ++i) {
         const auto& a = plan.pathTraceSpec[i];
         const auto& b = basePlan.pathTraceSpec[i];

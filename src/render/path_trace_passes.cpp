@@ -30,9 +30,9 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     using namespace shader;
     const IntegratorSettings& in = scene.integrator;
 
-    plan.passes.push_back({"path_trace", "path_trace",
-                           "integrator 'path_tracer': camera paths with next-event estimation and MIS, "
-                           "accumulated per pixel"});
+    plan.passes.push_back(plannedPass(PassKind::PathTrace,
+                                      "integrator 'path_tracer': camera paths with next-event estimation and MIS, "
+                                      "accumulated per pixel"));
     plan.skipped.push_back({"photon_trace, hash_grid_build, gather", "the integrator does not use photons"});
     if (f.media) {
         const auto& t = in.transmittance;
@@ -56,28 +56,31 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         plan.levelSchedule = in.debias.schedule;
     if (plan.levelSchedule == LevelSchedule::Queued) {
         plan.passes.insert(plan.passes.begin(),
-                           {{"level_count", "level_count", "level_schedule 'queued': histogram of the drawn levels"},
-                            {"level_scan", "level_scan", "prefix sum of the level histogram"},
-                            {"level_scatter", "level_scatter", "(pixel, sample) items sorted by level into a queue"}});
+                           {plannedPass(PassKind::LevelCount, "level_schedule 'queued': histogram of the drawn levels"),
+                            plannedPass(PassKind::LevelScan, "prefix sum of the level histogram"),
+                            plannedPass(PassKind::LevelScatter, "(pixel, sample) items sorted by level into a queue")});
         plan.passes.back().why += "; lanes take items from the level queue";
-        plan.passes.push_back({"path_resolve", "path_resolve", "accumulates the queued results per pixel in sample order"});
+        plan.passes.push_back(
+            plannedPass(PassKind::PathResolve, "accumulates the queued results per pixel in sample order"));
     }
 
     // ---- Estimator ----
     if (in.debias.estimator != DebiasEstimator::None && in.debias.pmf.type == PmfType::Auto)
         plan.passes.insert(plan.passes.begin(),
-                           {"pmf_pilot", "path_trace",
+                           {PassKind::PathTrace, "pmf_pilot", "path_trace",
                             fmt::format("pmf 'auto': before the render, {} spp at each of {} fixed levels measure the "
                                         "second moment and cost of the correction",
-                                        in.debias.pmf.pilotSpp, in.debias.pmf.pilotLevels)});
+                                        in.debias.pmf.pilotSpp, in.debias.pmf.pilotLevels),
+                            true});
     if (f.media && in.transmittance.type == TransmittanceEstimatorType::DebiasedRayMarch &&
         in.transmittance.pmf.type == PmfType::Auto)
         plan.passes.insert(plan.passes.begin(),
-                           {"transmittance_pilot", "path_trace",
+                           {PassKind::PathTrace, "transmittance_pilot", "path_trace",
                             fmt::format("transmittance pmf 'auto': before the render, {} spp at each of {} fixed marching "
                                         "levels (correction weighted by 1 and by 2) measure the second moment and cost "
                                         "of the correction",
-                                        in.transmittance.pmf.pilotSpp, in.transmittance.pmf.pilotLevels)});
+                                        in.transmittance.pmf.pilotSpp, in.transmittance.pmf.pilotLevels),
+                            true});
     if (plan.pilotLevel != kNoPilotLevel && plan.pilotKind == PilotKind::Transmittance) {
         plan.estimator = fmt::format("transmittance pmf pilot: debiased ray marching at the fixed level j = k + {}, "
                                      "k = {}, the correction weighted by 1 or 2", plan.pilotLevel & ~shader::kTrPilotHalfWeight,
@@ -153,8 +156,10 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
 
     plan.featuresOf = "path_trace";
     // Scenes with glossy materials get the path tracer that has their code (path_trace_glossy.comp);
-    // the others keep the smaller pipeline.
-    plan.pathTraceShader = f.bsdfFamilies != 0u ? "path_trace_glossy" : "path_trace";
+    // the others keep the smaller pipeline. (The pilots' entries run the render's path_trace too.)
+    if (f.bsdfFamilies != 0u)
+        for (PlannedPass& p : plan.passes)
+            if (p.kind == PassKind::PathTrace) p.shader = "path_trace_glossy";
     plan.pathTraceSpec = {
         {kSpecMaxBounces, pathDepthK(in)},
         {kSpecMinBounces, in.minBounces},
@@ -228,7 +233,7 @@ class PathTracePasses : public SamplePasses {
 public:
     PathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan, const RenderBuffers& b,
                     uint32_t seed)
-        : pipeline_(context, plan.pathTraceShader, shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
+        : pipeline_(context, plannedEntry(plan, PassKind::PathTrace).shader, shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
                     deviceSceneSpec(context, plan.pathTraceSpec, b), kPathTraceUniformBindings, kSceneTexelBindings) {
         pipeline_.bindBuffers(b.sceneBindings(context, true));
         for (const auto& s : plan.pathTraceSpec)
@@ -299,7 +304,7 @@ public:
         while (s[shader::kLoopStatCarried] != s[shader::kLoopStatResumed]) {
             drain_->reserve(1);
             drain_->begin();
-            drain_->dispatch(pipeline_, &drain, sizeof(drain), groupsX_, groupsY_, 1, "path_trace (carried)");
+            drain_->dispatch(pipeline_, &drain, sizeof(drain), groupsX_, groupsY_, 1, carriedLabel_.c_str());
             for (auto& t : drain_->submitAndWait()) extra.push_back(std::move(t));
             ++drainDispatches_;
             s = readLoopStats();
@@ -362,11 +367,12 @@ private:
         push_.queueAddressHi = uint32_t(levelQueue_.address() >> 32);
         push_.queueCapacity = uint32_t(capacity);
         const uint32_t pushBytes = uint32_t(sizeof(shader::PathTracePush));
+        auto desc = [&](PassKind kind) {
+            return gpu::PipelineDesc{plannedEntry(plan, kind).shader, 0, pushBytes, plan.pathTraceSpec};
+        };
         std::vector<std::unique_ptr<gpu::ComputePipeline>> passes = gpu::createComputePipelines(
-            context, {{"level_count", 0, pushBytes, plan.pathTraceSpec},
-                      {"level_scan", 0, pushBytes, plan.pathTraceSpec},
-                      {"level_scatter", 0, pushBytes, plan.pathTraceSpec},
-                      {"path_resolve", 0, pushBytes, plan.pathTraceSpec}});
+            context, {desc(PassKind::LevelCount), desc(PassKind::LevelScan), desc(PassKind::LevelScatter),
+                      desc(PassKind::PathResolve)});
         levelCount_ = std::move(passes[0]);
         levelScan_ = std::move(passes[1]);
         levelScatter_ = std::move(passes[2]);
@@ -376,7 +382,7 @@ private:
     void record(gpu::CommandBatch& batch, const shader::PathTracePush& push, bool warm) {
         if (!levelCount_) {
             batch.dispatch(pipeline_, &push, sizeof(push), warm ? 1 : groupsX_, warm ? 1 : groupsY_, 1,
-                           warm ? "warm-up" : "path_trace");
+                           warm ? "warm-up" : passName(PassKind::PathTrace));
             return;
         }
         // Sort this unit's (pixel, sample) items by level, trace them, resolve per pixel.
@@ -384,12 +390,12 @@ private:
         const uint64_t chunks = (items + shader::kLevelChunk - 1) / shader::kLevelChunk;
         const uint32_t chunkGroups = uint32_t(
             std::max<uint64_t>((chunks + shader::kLevelQueueGroupSize - 1) / shader::kLevelQueueGroupSize, 1));
-        auto name = [warm](const char* pass) { return warm ? "warm-up" : pass; };
-        batch.dispatch(*levelCount_, &push, sizeof(push), chunkGroups, 1, 1, name("level_count"));
-        batch.dispatch(*levelScan_, &push, sizeof(push), 1, 1, 1, name("level_scan"));
-        batch.dispatch(*levelScatter_, &push, sizeof(push), chunkGroups, 1, 1, name("level_scatter"));
-        batch.dispatch(pipeline_, &push, sizeof(push), groupsX_, groupsY_, 1, name("path_trace"));
-        batch.dispatch(*pathResolve_, &push, sizeof(push), groupsX_, groupsY_, 1, name("path_resolve"));
+        auto name = [warm](PassKind pass) { return warm ? "warm-up" : passName(pass); };
+        batch.dispatch(*levelCount_, &push, sizeof(push), chunkGroups, 1, 1, name(PassKind::LevelCount));
+        batch.dispatch(*levelScan_, &push, sizeof(push), 1, 1, 1, name(PassKind::LevelScan));
+        batch.dispatch(*levelScatter_, &push, sizeof(push), chunkGroups, 1, 1, name(PassKind::LevelScatter));
+        batch.dispatch(pipeline_, &push, sizeof(push), groupsX_, groupsY_, 1, name(PassKind::PathTrace));
+        batch.dispatch(*pathResolve_, &push, sizeof(push), groupsX_, groupsY_, 1, name(PassKind::PathResolve));
     }
 
     std::unique_ptr<gpu::ComputePipeline> levelCount_, levelScan_, levelScatter_, pathResolve_;
@@ -409,6 +415,8 @@ private:
     gpu::Buffer pilot_;  // pmf pilot only: kPilot* sums
     size_t pixels_ = 0;
     gpu::ComputePipeline pipeline_;
+    // The drains' timing label: path_trace's, marked (the plan test counts it as path_trace).
+    const std::string carriedLabel_ = std::string(passName(PassKind::PathTrace)) + " (carried)";
     shader::PathTracePush push_{};
     uint32_t groupsX_ = 1, groupsY_ = 1, samplesPerUnit_ = 1;
 };

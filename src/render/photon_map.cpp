@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "render/render_plan.h"
+
 namespace telescope {
 
 namespace {
@@ -40,7 +42,8 @@ gpu::PipelineDesc PhotonMap::stageDesc(uint32_t stage, bool texels, uint32_t ker
     constexpr uint32_t kTexels = (1u << kGridBindingSortedTexels) | (1u << kGridBindingPhotonTexels);
     constexpr uint32_t kStorageTexels =
         (1u << kGridBindingSortedImage) | (1u << kGridBindingCountImage) | (1u << kGridBindingStartImage);
-    return {"hash_grid_build", kGridBindingCount, uint32_t(sizeof(HashGridPush)),
+    return {stage == kGridStageQuery ? passInfo(PassKind::GridQuery).shader : passInfo(PassKind::HashGridBuild).shader,
+            kGridBindingCount, uint32_t(sizeof(HashGridPush)),
             {{kSpecGridStage, stage}, {kSpecPhotonKernel, kernel}, {kSpecSortedTexels, texels},
              {kSpecPhotonGatherCount, gatherCount}, {kSpecGatherSliceLength, sliceLength(gatherCount)}},
             0, kTexels, kStorageTexels};
@@ -170,7 +173,7 @@ shader::HashGridPush PhotonMap::basePush() const {
 void PhotonMap::recordStage(gpu::CommandBatch& batch, uint32_t stage, const shader::HashGridPush& push,
                             uint64_t threads) {
     uint64_t groups = std::clamp<uint64_t>((threads + shader::kGridGroupSize - 1) / shader::kGridGroupSize, 1, kMaxGroups);
-    batch.dispatch(*stages_[stage], &push, sizeof(push), uint32_t(groups), 1, 1, "hash_grid_build");
+    batch.dispatch(*stages_[stage], &push, sizeof(push), uint32_t(groups), 1, 1, passName(PassKind::HashGridBuild));
 }
 
 void PhotonMap::recordBuild(gpu::CommandBatch& batch) {
@@ -193,7 +196,7 @@ void PhotonMap::recordBuild(gpu::CommandBatch& batch) {
         p.count = scanLevelCounts_[level];
         p.tableLevel = level == 0 ? 1u : 0u;
         uint32_t blocks = (p.count + kScanBlock - 1) / kScanBlock;
-        batch.dispatch(*stages_[kGridStageScan], &p, sizeof(p), blocks, 1, 1, "hash_grid_build");
+        batch.dispatch(*stages_[kGridStageScan], &p, sizeof(p), blocks, 1, 1, passName(PassKind::HashGridBuild));
     }
     for (size_t level = scanLevelCounts_.size() - 1; level-- > 0;) {
         shader::HashGridPush p = push;
@@ -284,7 +287,7 @@ std::vector<glm::vec4> PhotonMap::runQuery(const std::vector<glm::vec3>& positio
         gpu::CommandBatch batch(context_, 1);
         batch.begin();
         p.sliceBegin = slice * sliceLength(gatherCount);
-        batch.dispatch(pipeline, &p, sizeof(p), groups, 1, 1, "query");
+        batch.dispatch(pipeline, &p, sizeof(p), groups, 1, 1, passName(PassKind::GridQuery));
         batch.submitAndWait();
     }
     return results.downloadAll<glm::vec4>();

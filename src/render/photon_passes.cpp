@@ -74,21 +74,21 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
     const PhotonSettings& ph = in.photon;
     const bool nee = ph.directLighting == DirectLighting::NextEvent;
 
-    plan.passes.push_back({"photon_trace", "photon_trace",
+    plan.passes.push_back(plannedPass(PassKind::PhotonTrace,
                            fmt::format("{} photon paths per pass from the lights (picked by power), stored at diffuse "
                                        "hits{} in one photon buffer (grown, never truncated)",
-                                       ph.photonCount, nee ? " after the first bounce" : "")});
-    plan.passes.push_back({"hash_grid_build", "hash_grid_build",
+                                       ph.photonCount, nee ? " after the first bounce" : "")));
+    plan.passes.push_back(plannedPass(PassKind::HashGridBuild,
                            "count photons per hash bucket, exclusive prefix sum, scatter; cell size = the largest "
-                           "gather diameter of the pass"});
-    plan.passes.push_back({"gather", "gather",
+                           "gather diameter of the pass"));
+    plan.passes.push_back(plannedPass(PassKind::Gather,
                            fmt::format("camera paths through specular bounces to the first diffuse vertex (radiance "
                                        "scaled by 1/eta^2 at each refraction), one traversal of the 2x2x2 cells ({}{} "
                                        "kernel){}",
                                        ph.gatherCount > 0 ? fmt::format("the {} nearest photons within the radius, ",
                                                                         ph.gatherCount)
                                                           : std::string(),
-                                       kernelName(ph.kernel), nee ? ", direct light by next-event estimation" : "")});
+                                       kernelName(ph.kernel), nee ? ", direct light by next-event estimation" : "")));
     plan.skipped.push_back({"volume tracking", "photon mapping scenes have no participating media (the loader rejects them)"});
     plan.skipped.push_back({"path_trace", fmt::format("the integrator is '{}'", nameOf(kIntegratorTypeNames, in.type))});
 
@@ -198,9 +198,11 @@ public:
           camera_(scene.camera),
           seed_(seed),
           map_(context, scene.integrator.photon.photonCount),
+          gatherShader_(plannedEntry(plan, PassKind::Gather).shader),
           gatherSpec_(deviceSceneSpec(context, plan.photonSpec, b, false)),
           pipelines_(gpu::createComputePipelines(
-              context, {{"photon_trace", shader::kSceneBindingCount, uint32_t(sizeof(shader::PhotonTracePush)),
+              context, {{plannedEntry(plan, PassKind::PhotonTrace).shader, shader::kSceneBindingCount,
+                         uint32_t(sizeof(shader::PhotonTracePush)),
                          deviceSceneSpec(context, plan.photonSpec, b), kSceneUniformBindings, kSceneTexelBindings},
                         gatherDesc(map_.texelsFit())})),
           trace_(*pipelines_[0]),
@@ -268,7 +270,7 @@ public:
         // 2D when the paths need more workgroups than one dimension allows.
         const uint32_t gx = std::min<uint32_t>(traceGroups, 32768), gy = (traceGroups + gx - 1) / gx;
         tracePush_.rowThreads = gx * shader::kPhotonTraceGroupSize;
-        batch.dispatch(trace_, &tracePush_, sizeof(tracePush_), gx, gy, 1, "photon_trace");
+        batch.dispatch(trace_, &tracePush_, sizeof(tracePush_), gx, gy, 1, passName(PassKind::PhotonTrace));
 
         map_.recordBuild(batch);
         if (gatherBinds_ != map_.generation()) bindGather();  // the photon map was reallocated
@@ -284,7 +286,7 @@ public:
         for (uint32_t slice = 0; slice < slices_; ++slice) {
             gatherPush_.slice = slice;
             batch.dispatch(*pipelines_[1], &gatherPush_, sizeof(gatherPush_), (cam.width + 7) / 8, (cam.height + 7) / 8, 1,
-                           "gather");
+                           passName(PassKind::Gather));
         }
         return blocks() && passInBlock_ + 1 < block_.passes ? 0 : 1;
     }
@@ -386,7 +388,7 @@ private:
         std::vector<gpu::SpecConstant> spec = gatherSpec_;
         spec.push_back({shader::kSpecSortedTexels, texels});
         spec.push_back({shader::kSpecGatherSliceLength, PhotonMap::sliceLength(integrator_.photon.gatherCount)});
-        return {"gather", shader::kGatherBindingCount, uint32_t(sizeof(shader::GatherPush)), spec,
+        return {gatherShader_, shader::kGatherBindingCount, uint32_t(sizeof(shader::GatherPush)), spec,
                 kSceneUniformBindings, kSceneTexelBindings | (1u << shader::kBindingSortedTexels)};
     }
 
@@ -420,6 +422,7 @@ private:
     Camera camera_;  // resolution only (the gather's dispatch size)
     uint32_t seed_;
     PhotonMap map_;
+    std::string gatherShader_;  // the plan's gather entry's shader
     std::vector<gpu::SpecConstant> gatherSpec_;  // but kSpecSortedTexels
     std::vector<std::unique_ptr<gpu::ComputePipeline>> pipelines_;  // photon_trace, gather; created in parallel
     gpu::ComputePipeline& trace_;

@@ -21,6 +21,23 @@ std::string pmfDescription(const PmfSettings& pmf) {
 
 uint32_t filterConstant(const Camera& camera) { return uint32_t(camera.filter); }
 
+const PassInfo& passInfo(PassKind kind) {
+    for (const PassInfo& p : kPassTable)
+        if (p.kind == kind) return p;
+    throw std::logic_error("a pass kind missing from kPassTable");
+}
+
+PlannedPass plannedPass(PassKind kind, std::string why) {
+    const PassInfo& info = passInfo(kind);
+    return PlannedPass{kind, info.name, info.shader, std::move(why), false};
+}
+
+const PlannedPass& plannedEntry(const RenderPlan& plan, PassKind kind) {
+    for (const PlannedPass& p : plan.passes)
+        if (!p.pilot && p.kind == kind) return p;
+    throw std::logic_error(fmt::format("the plan has no {} pass", passName(kind)));
+}
+
 std::string describeSpecialisation(const std::vector<gpu::SpecConstant>& spec) {
     std::vector<gpu::SpecConstant> sorted = spec;
     std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
@@ -73,7 +90,9 @@ std::string describePlan(const Scene& scene, const RenderPlan& plan) {
                              ? "chosen by a pilot before the render (see below)"
                              : scene.integrator.transmittance.pmf.origin);
     s += "passes, per batch of samples:\n";
-    for (const auto& p : plan.passes) s += fmt::format("  {:<16} {}\n", p.name, p.why);
+    for (const auto& p : plan.passes)
+        s += fmt::format("  {:<16} {}{}\n", p.name, p.why,
+                         p.shader != p.name ? fmt::format(" [{}.comp]", p.shader) : std::string());
     s += "not scheduled:\n";
     for (const auto& p : plan.skipped) s += fmt::format("  {:<16} {}\n", p.name, p.why);
     s += fmt::format("compiled into the {} pipeline{}:\n", plan.featuresOf,
@@ -83,7 +102,7 @@ std::string describePlan(const Scene& scene, const RenderPlan& plan) {
     if (!plan.pathTraceSpec.empty())
         s += fmt::format("specialisation of {} (the scene's values; a device may change the loop budget and the "
                          "scene's bindings):\n{}",
-                         plan.pathTraceShader, describeSpecialisation(plan.pathTraceSpec));
+                         plannedEntry(plan, PassKind::PathTrace).shader, describeSpecialisation(plan.pathTraceSpec));
     if (!plan.photonSpec.empty())
         s += fmt::format("specialisation of photon_trace and gather (as above):\n{}", describeSpecialisation(plan.photonSpec));
     if (!scene.ignoredKeys.empty()) {

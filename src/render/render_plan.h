@@ -14,11 +14,56 @@
 
 namespace telescope {
 
-struct PlannedPass {
-    std::string name;    // dispatch name, used for timing and stats
-    std::string shader;  // .comp file (without extension)
-    std::string why;
+// Every pass a render can dispatch, once: its name (the plan's, and the label its dispatches are
+// timed under in RenderStats::passes), the shader it runs unless the plan picks a variant, and what
+// it binds. The plan lists the passes a render runs (PlannedPass); the integrators' passes create
+// their pipelines from those entries and label their dispatches with passName.
+enum class PassKind : uint32_t {
+    PathTrace,
+    LevelCount,
+    LevelScan,
+    LevelScatter,
+    PathResolve,
+    PhotonTrace,
+    HashGridBuild,
+    Gather,
+    GridQuery,
 };
+struct PassInfo {
+    PassKind kind;
+    const char* name;
+    const char* shader;    // .comp file without extension
+    const char* bindings;  // in words: what the pass reads and writes
+};
+inline constexpr PassInfo kPassTable[] = {
+    {PassKind::PathTrace, "path_trace", "path_trace",
+     "the scene (RenderBuffers::sceneBindings, media included); the film, pilot sums, loop statistics and "
+     "continuation records by address"},
+    {PassKind::LevelCount, "level_count", "level_count", "the level queue by address"},
+    {PassKind::LevelScan, "level_scan", "level_scan", "the level queue by address"},
+    {PassKind::LevelScatter, "level_scatter", "level_scatter", "the level queue by address"},
+    {PassKind::PathResolve, "path_resolve", "path_resolve", "the level queue and the film by address"},
+    {PassKind::PhotonTrace, "photon_trace", "photon_trace",
+     "the scene (sceneBindings without media); the photon buffer by address"},
+    {PassKind::HashGridBuild, "hash_grid_build", "hash_grid_build",
+     "the photon arrays as texels and storage texels (kGridBinding*), or by address"},
+    {PassKind::Gather, "gather", "gather",
+     "the scene without media, the sorted photons' texels at kBindingSortedTexels; blocks and film by address"},
+    {PassKind::GridQuery, "query", "hash_grid_build", "as hash_grid_build; kernel sums at query points (tests only)"},
+};
+const PassInfo& passInfo(PassKind kind);
+inline const char* passName(PassKind kind) { return passInfo(kind).name; }
+
+struct PlannedPass {
+    PassKind kind = PassKind::PathTrace;
+    std::string name;    // passName(kind), or the pmf pilots' entries (pilot true)
+    std::string shader;  // .comp file (without extension): the table's, or the plan's variant of it
+    std::string why;
+    // Run before the render by the pmf pilots' own Renderers (render/pmf_pilot.h), not by this one.
+    bool pilot = false;
+};
+// The plan's entry for a pass of the table (its shader the table's).
+PlannedPass plannedPass(PassKind kind, std::string why);
 
 struct SkippedPass {
     std::string name;
@@ -50,7 +95,6 @@ struct RenderPlan {
     std::vector<SkippedPass> skipped;
     std::vector<FeatureSwitch> features;
     std::vector<gpu::SpecConstant> pathTraceSpec;  // path_trace
-    std::string pathTraceShader = "path_trace";    // or "path_trace_glossy" (glossy materials present)
     std::vector<gpu::SpecConstant> photonSpec;     // photon_trace and gather
     // photon_trace: a sphere around the geometry (centre, radius); lights at infinity (the
     // environment, a cap) emit their photons through its disk facing each direction.
@@ -62,6 +106,9 @@ struct RenderPlan {
     uint32_t pilotLevel = kNoPilotLevel;  // the pmf pilot's first level (path tracer only)
     PilotKind pilotKind = PilotKind::PathDepth;
 };
+
+// The plan's entry of a pass this render dispatches; std::logic_error when the plan has none.
+const PlannedPass& plannedEntry(const RenderPlan& plan, PassKind kind);
 
 RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& features, uint32_t pilotLevel = kNoPilotLevel,
                           PilotKind pilotKind = PilotKind::PathDepth);
