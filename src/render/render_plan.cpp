@@ -56,7 +56,9 @@ std::string describeSpecialisation(const std::vector<gpu::SpecConstant>& spec) {
     return s;
 }
 
-RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f, uint32_t pilotLevel, PilotKind pilotKind) {
+RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f, const PlanOptions& options) {
+    const uint32_t pilotLevel = options.pilotLevel;
+    const PilotKind pilotKind = options.pilotKind;
     RenderPlan plan;
     if (pilotLevel != kNoPilotLevel && usesPhotons(scene.integrator))
         throw std::logic_error("the pmf pilot runs the path tracer only");
@@ -90,9 +92,10 @@ std::string describePlan(const Scene& scene, const RenderPlan& plan) {
                              ? "chosen by a pilot before the render (see below)"
                              : scene.integrator.transmittance.pmf.origin);
     s += "passes, per batch of samples:\n";
-    for (const auto& p : plan.passes)
-        s += fmt::format("  {:<16} {}{}\n", p.name, p.why,
-                         p.shader != p.name ? fmt::format(" [{}.comp]", p.shader) : std::string());
+    for (const auto& p : plan.passes) {
+        s += fmt::format("  {:<16} {}\n", p.name, p.why);
+        s += fmt::format("  {:<16} runs {}.comp; binds {}\n", "", p.shader, passInfo(p.kind).bindings);
+    }
     s += "not scheduled:\n";
     for (const auto& p : plan.skipped) s += fmt::format("  {:<16} {}\n", p.name, p.why);
     s += fmt::format("compiled into the {} pipeline{}:\n", plan.featuresOf,

@@ -110,8 +110,7 @@ struct RenderPlan {
 // The plan's entry of a pass this render dispatches; std::logic_error when the plan has none.
 const PlannedPass& plannedEntry(const RenderPlan& plan, PassKind kind);
 
-RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& features, uint32_t pilotLevel = kNoPilotLevel,
-                          PilotKind pilotKind = PilotKind::PathDepth);
+RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& features, const PlanOptions& options = {});
 
 // Human-readable plan, as `telescope plan` prints it.
 std::string describePlan(const Scene& scene, const RenderPlan& plan);

@@ -23,7 +23,7 @@ Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, con
     if (*autoPmfKey(scene.integrator) != '\0')
         throw std::logic_error("the auto pmf must be resolved by a pilot (resolveAutoPmf) before rendering");
     gpuScene_ = buildGpuScene(scene);
-    plan_ = makeRenderPlan(scene, gpuScene_.features, options.pilotLevel, options.pilotKind);
+    plan_ = makeRenderPlan(scene, gpuScene_.features, options);
     stats_.sceneSeconds = secondsSince(start);
     auto phase = Clock::now();
 
