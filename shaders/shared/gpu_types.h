@@ -182,8 +182,11 @@ CONST uint kLoopStatCount = 5u;
 // A continuation record: kContinuationVec4s vec4 per lane (path_trace_main.glsl saveRecord).
 CONST uint kContinuationVec4s = 8u;
 
-CONST uint kMaxBruteForcePrims = 20u;     // the largest scene traced primitive by primitive (kSpecBruteForcePrims) (break-even ~24: docs/BENCHMARKS.md)
-CONST uint kTrPilotHalfWeight = 0x80000000u;  // the transmittance pilot (kSpecTrPilot): its pc.pilotLevel bit: the correction weighted by 2, not 1
+// The largest scene traced primitive by primitive (kSpecBruteForcePrims; break-even ~24:
+// docs/BENCHMARKS.md).
+CONST uint kMaxBruteForcePrims = 20u;
+// The transmittance pilot's (kSpecTrPilot) pc.pilotLevel bit: the correction weighted by 2, not 1.
+CONST uint kTrPilotHalfWeight = 0x80000000u;
 
 CONST uint kPathTraceGroupSize = 8u;  // 8x8 pixel tiles
 
