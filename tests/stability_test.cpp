@@ -336,7 +336,9 @@ TEST_F(Stability, MirrorFurnaceAtTheTraceDepthCap) {
         Film film;
         const RenderStats stats = renderWithStats(scene, 8, 19, film);
         expectLoopsComplete(stats);
-        if (sharedContext().cpuDevice()) EXPECT_GT(stats.loops.carried, 0u) << "deep paths span several dispatches";
+        if (sharedContext().cpuDevice()) {
+            EXPECT_GT(stats.loops.carried, 0u) << "deep paths span several dispatches";
+        }
         expectFinite(film, "mirror furnace");
         expectImageMean(film, capped, std::string("mirror furnace at the depth cap, samples per dispatch ") + perDispatch);
     }
@@ -401,7 +403,9 @@ TEST_F(Stability, BigMeshSameImageAtOneAndSixteenSamplesPerDispatch) {
         stats = renderWithStats(scene, 16, 5, sixteen);
         expectLoopsComplete(stats);
     }
-    if (sharedContext().cpuDevice()) EXPECT_GT(stats.loops.carried, 0u) << "16 samples of this scene pass a budget of 2000";
+    if (sharedContext().cpuDevice()) {
+        EXPECT_GT(stats.loops.carried, 0u) << "16 samples of this scene pass a budget of 2000";
+    }
     double worst = 0.0, control = 0.0;
     for (size_t i = 0; i < one.pixelCount(); ++i)
         for (int k = 0; k < 3; ++k) {
@@ -465,7 +469,9 @@ TEST_F(Stability, TinyLoopBudgetLeavesTheImageUnchanged) {
         stats = renderWithStats(scene, 8, 41, tiny);
     }
     expectLoopsComplete(stats);
-    if (sharedContext().cpuDevice()) EXPECT_GT(stats.loops.carried, 1000u) << "a budget of 200 carries most paths";
+    if (sharedContext().cpuDevice()) {
+        EXPECT_GT(stats.loops.carried, 1000u) << "a budget of 200 carries most paths";
+    }
     double worst = 0.0;
     for (size_t i = 0; i < tiny.pixelCount(); ++i)
         for (uint32_t c : {shader::kChannelEstimate, shader::kChannelBase, shader::kChannelCorrection}) {

@@ -33,7 +33,9 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     plan.passes.push_back(plannedPass(PassKind::PathTrace,
                                       "integrator 'path_tracer': camera paths with next-event estimation and MIS, "
                                       "accumulated per pixel"));
-    plan.skipped.push_back({"photon_trace, hash_grid_build, gather", "the integrator does not use photons"});
+    plan.skipped.push_back({fmt::format("{}, {}, {}", passName(PassKind::PhotonTrace), passName(PassKind::HashGridBuild),
+                                        passName(PassKind::Gather)),
+                            "the integrator does not use photons"});
     if (f.media) {
         const auto& t = in.transmittance;
         std::string how = transmittanceEstimatorName(t.type);

@@ -90,7 +90,8 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
                                                           : std::string(),
                                        kernelName(ph.kernel), nee ? ", direct light by next-event estimation" : "")));
     plan.skipped.push_back({"volume tracking", "photon mapping scenes have no participating media (the loader rejects them)"});
-    plan.skipped.push_back({"path_trace", fmt::format("the integrator is '{}'", nameOf(kIntegratorTypeNames, in.type))});
+    plan.skipped.push_back(
+        {passName(PassKind::PathTrace), fmt::format("the integrator is '{}'", nameOf(kIntegratorTypeNames, in.type))});
 
     // ---- Estimator ----
     if (!unbiased(in) && !progressive(in)) {
