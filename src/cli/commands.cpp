@@ -204,7 +204,7 @@ int runDerivativeRender(const CommonOptions& common, const RenderOptions& option
     if (resume) {
         // Compared on the settings as run (a key that differs is named); checkpoints that do not
         // record the derivative's settings (older ones) by the estimator's description.
-        if (resume->settings.find("\"derivative\"") != std::string::npos) {
+        if (!splitDerivativeSettings(resume->settings).derivative.is_null()) {
             if (resume->settings != settingsNow)
                 throw InputError(o.resumePath, firstDifference(resume->settings, settingsNow),
                                  "checkpoint was rendered with other settings than this derivative render resolves");

@@ -26,22 +26,6 @@ using namespace session;  // the session layer: loading, outputs, checks
 
 namespace {
 
-// A checkpoint's settings (OutputInfo::settings) split into the scene's (resolvedSettings) and a
-// derivative render's "derivative" object (null for a radiance render).
-struct SettingsParts {
-    std::string scene;
-    nlohmann::json derivative;
-};
-SettingsParts splitDerivativeSettings(const std::string& settings) {
-    if (settings.empty()) return {settings, nullptr};
-    nlohmann::json j = nlohmann::json::parse(settings, nullptr, false);
-    if (j.is_discarded() || !j.is_object() || !j.contains("derivative")) return {settings, nullptr};
-    SettingsParts parts{"", j["derivative"]};
-    j.erase("derivative");
-    parts.scene = j.dump();
-    return parts;
-}
-
 // The merge's note on a checkpoint whose block in progress it leaves out.
 std::string blockLeftOut(const std::string& path, const std::string& block) {
     return path + ": " + block + " is not in the merge; resume that render to finish it, then merge again";

@@ -408,7 +408,7 @@ void SceneReader::checkEstimatorFitsMedia(const json& doc) const {
                                       "but {} has the '{}' transmittance (linear, quadratic and pulse have kinks or "
                                       "steps, davis_weinstein a branch point at zero depth; use debiased_ray_march)",
                                       where, m.name));
-        } else if (!m.exponential()) {
+        } else if (estimatesExponentialOnly(t) && !m.exponential()) {
             fail(key, fmt::format("{} works for exponential media only, but {} has the '{}' transmittance "
                                   "(use ray_march, debiased_ray_march or taylor)",
                                   transmittanceEstimatorName(t), where, m.name));

@@ -163,6 +163,12 @@ enum class TransmittanceEstimatorType : uint32_t {
     Taylor = shader::kTrEstTaylor
 };
 const char* transmittanceEstimatorName(TransmittanceEstimatorType t);
+// The trackers and Kettunen et al.'s unbiased ray marching estimate exp(-tau) only: they need
+// exponential media (the reader refuses them elsewhere; the transmittance study skips those models).
+inline bool estimatesExponentialOnly(TransmittanceEstimatorType t) {
+    return t == TransmittanceEstimatorType::DeltaTracking || t == TransmittanceEstimatorType::RatioTracking ||
+           t == TransmittanceEstimatorType::ResidualRatioTracking || t == TransmittanceEstimatorType::UnbiasedRayMarch;
+}
 
 enum class LightType : uint32_t { Point = shader::kLightPoint, Environment = shader::kLightEnvironment, Cap = shader::kLightCap };
 

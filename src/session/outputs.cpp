@@ -128,6 +128,16 @@ std::string derivativeSettingsAsRun(const Scene& scene, const DerivativeRenderer
     return j.dump();
 }
 
+SettingsParts splitDerivativeSettings(const std::string& settings) {
+    if (settings.empty()) return {settings, nullptr};
+    nlohmann::json j = nlohmann::json::parse(settings, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || !j.contains("derivative")) return {settings, nullptr};
+    SettingsParts parts{"", j["derivative"]};
+    j.erase("derivative");
+    parts.scene = j.dump();
+    return parts;
+}
+
 void reportIgnoredKeys(const Scene& scene, bool quiet) {
     if (quiet) return;
     for (const auto& key : scene.ignoredKeys) {

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "gpu/context.h"
 #include "render/film.h"
 #include "render/derivative.h"
@@ -36,6 +38,13 @@ std::vector<std::pair<std::string, std::string>> derivativeMetadata(const Deriva
 // level pmf as run, p(j) for each level: the pilot's table where pmf "auto" chose it). Resuming
 // compares these; a shard merge compares the scene's part with its plan.
 std::string derivativeSettingsAsRun(const Scene& scene, const DerivativeRenderer& r);
+// Recorded settings (OutputInfo::settings) split into the scene's part (resolvedSettings) and the
+// "derivative" object (null for a radiance render, and for settings that are not a JSON object).
+struct SettingsParts {
+    std::string scene;
+    nlohmann::json derivative;
+};
+SettingsParts splitDerivativeSettings(const std::string& settings);
 gpu::ContextOptions contextOptions(const CommonOptions& o);
 
 // Throw InputError naming the option when a path has the wrong extension or no directory.

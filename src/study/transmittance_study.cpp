@@ -61,13 +61,8 @@ struct EstimatorSpec {
 const std::vector<EstimatorSpec>& estimators() {
     static const std::vector<EstimatorSpec> list = [] {
         std::vector<EstimatorSpec> l;
-        for (const auto& [value, name] : kTransmittanceEstimatorNames) {
-            const uint32_t type = uint32_t(value);
-            const bool exponentialOnly = type == shader::kTrEstDeltaTracking || type == shader::kTrEstRatioTracking ||
-                                         type == shader::kTrEstResidualRatioTracking ||
-                                         type == shader::kTrEstUnbiasedRayMarch;
-            l.push_back({name, type, exponentialOnly});
-        }
+        for (const auto& [value, name] : kTransmittanceEstimatorNames)
+            l.push_back({name, uint32_t(value), estimatesExponentialOnly(value)});
         return l;
     }();
     return list;
