@@ -13,6 +13,7 @@
 
 #include "bench_main.h"
 #include "gpu/context.h"
+#include "render/pmf_pilot.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 
@@ -23,7 +24,7 @@ namespace {
 
 // Renders 16 spp of a 256x256 scene per iteration and reports paths per second.
 void pathsPerSecond(benchmark::State& state, const Scene& scene) {
-    Renderer renderer(context(), scene, 1);
+    Renderer renderer(context(), resolveScene(context(), scene, 1).scene, 1);
     RenderRequest warmup;
     warmup.spp = 4;  // first dispatch compiles the pipeline
     renderer.render(warmup);
@@ -70,7 +71,7 @@ void levelSchedule(benchmark::State& state, const std::string& sceneFile) {
         scenes.push_back(loadScene(std::string(TELESCOPE_SOURCE_DIR) + "/scenes/" + sceneFile, overrides));
     }
     for (const Scene& scene : scenes) {
-        renderers.push_back(std::make_unique<Renderer>(context(), scene, 1));
+        renderers.push_back(std::make_unique<Renderer>(context(), resolveScene(context(), scene, 1).scene, 1));
         RenderRequest warmup;
         warmup.spp = 4;  // first dispatch compiles the pipeline
         renderers.back()->render(warmup);

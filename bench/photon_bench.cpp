@@ -16,6 +16,7 @@
 
 #include "bench_main.h"
 #include "gpu/context.h"
+#include "render/pmf_pilot.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 
@@ -39,7 +40,7 @@ void photonPass(benchmark::State& state) {
     const double radius = 0.05 * std::sqrt(double(1 << 20) / double(n));
     Scene scene = planeScene(64, fmt::format(R"({{"type":"photon_map","photon_count":{},"gather_radius":{},
         "direct_lighting":"photons"}})", n, radius));
-    Renderer renderer(context(), scene, 1);
+    Renderer renderer(context(), resolveScene(context(), scene, 1).scene, 1);
     RenderRequest one;
     one.spp = 1;
     renderer.render(one);  // sizes the photon map
@@ -137,7 +138,7 @@ void budgetConvergence(benchmark::State& state, std::string label, std::string i
     for (auto _ : state) {
         for (uint32_t s = 0; s < seeds; ++s) {
             Scene scene = planeScene(kRes, integrator);
-            Renderer renderer(context(), scene, 7000 + 31 * s);
+            Renderer renderer(context(), resolveScene(context(), scene, 1).scene, 7000 + 31 * s);
             size_t next = 0;
             std::vector<double> before(want.size(), 0.0);
             while (next < res.budgets.size()) {

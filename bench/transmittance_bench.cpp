@@ -13,6 +13,7 @@
 
 #include "bench_main.h"
 #include "gpu/context.h"
+#include "render/pmf_pilot.h"
 #include "render/renderer.h"
 #include "scene/density_grid.h"
 #include "scene/scene_loader.h"
@@ -47,7 +48,7 @@ double slabClosedForm(const Camera& cam, uint32_t x, uint32_t y) {
 // (smoke box: unbiased estimators only, whose MSE is their variance).
 // One render of the scene at spp (seed 7): the film and the render's wall seconds.
 Film timedRender(const Scene& scene, uint64_t spp, double& seconds) {
-    Renderer renderer(context(), scene, 7);
+    Renderer renderer(context(), resolveScene(context(), scene, 1).scene, 7);
     RenderRequest request;
     request.spp = spp;
     renderer.render(request);

@@ -314,6 +314,27 @@ TEST_F(Cli, ReferenceResumesFromItsCheckpoint) {
         << "a biased scene gets an unbiased estimator for its reference";
 }
 
+// A reference of a scene whose pmf is "auto": the session runs the pilot (the Renderer cannot be
+// built without), the outputs record the pmf it chose, and the next run, which would resume the
+// checkpoint with another pilot's pmf, is refused naming the key.
+TEST_F(Cli, ReferenceResolvesAnAutoPmfAndRefusesToResumeIt) {
+    const std::string args = "reference " + test::sourcePath("scenes/furnace.json") +
+                             " --set camera.resolution=[8,8] --set integrator.max_bounces=2 --spp 2 -q --no-png"
+                             " --set 'integrator.debias={\"estimator\":\"sum\",\"pmf\":{\"type\":\"auto\",\"pilot_spp\":1,"
+                             "\"pilot_levels\":3}}' -o " + out("ref.exr");
+    CommandResult r = run(args);
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    auto in = OIIO::ImageInput::open(out("ref.exr"));
+    ASSERT_TRUE(in);
+    const nlohmann::json pmf =
+        nlohmann::json::parse(in->spec().get_string_attribute("telescope:settings"))["integrator"]["debias"]["pmf"];
+    EXPECT_NE(pmf["type"], "auto") << pmf.dump();
+    EXPECT_NE(pmf["origin"].get<std::string>().find("auto pilot"), std::string::npos) << pmf.dump();
+    r = run(args);
+    EXPECT_EQ(r.exitCode, 2) << r.stderrText;
+    EXPECT_NE(r.stderrText.find("integrator.debias.pmf.type"), std::string::npos) << r.stderrText;
+}
+
 TEST_F(Cli, ConvergeShowsTheBiasOfTruncationAndNotOfTheDebiasedEstimator) {
     ASSERT_EQ(run("reference " + scene() + " --set camera.resolution=[32,24] -q --spp 128 -o " + out("ref.exr")).exitCode, 0);
     CommandResult r = run("converge " + scene() + " --set camera.resolution=[32,24] -q --reference " + out("ref.exr") +

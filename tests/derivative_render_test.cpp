@@ -140,7 +140,7 @@ TEST_F(DerivativeRender, PointLightHeightMatchesTheClosedFormAndALargeForwardSte
         s.step = 0.25;
         s.levels = kLevels;
         s.estimator = e;
-        DerivativeRenderer r(sharedContext(), scene, s, 7);
+        DerivativeRenderer r(sharedContext(), resolved(scene), s, 7);
         return tTest(renderBatches(r, kBatches, kSpp, kBlock), exact);
     };
     for (auto e : {DerivativeEstimator::SingleTerm, DerivativeEstimator::Sum}) {
@@ -155,7 +155,7 @@ TEST_F(DerivativeRender, PointLightHeightMatchesTheClosedFormAndALargeForwardSte
         s.step = 0.25;
         s.levels = kLevels;
         s.autoPmf = true;
-        DerivativeRenderer r(sharedContext(), scene, s, 13);
+        DerivativeRenderer r(sharedContext(), resolved(scene), s, 13);
         const std::vector<double>& m = r.pilotSecondMoments();
         ASSERT_EQ(m.size(), s.levels);
         EXPECT_LT(m[1], 0.5 * m[0]);
@@ -190,7 +190,7 @@ TEST_F(DerivativeRender, FurnaceAlbedoMatchesTheClosedFormAndAMisweightedCorrect
         s.step = 0.2;  // I(0) = (L(0.7) - L(0.5)) / 0.2 = 6.67: the series corrects a large bias
         s.estimator = e;
         s.control = c;
-        DerivativeRenderer r(sharedContext(), scene, s, 11);
+        DerivativeRenderer r(sharedContext(), resolved(scene), s, 11);
         return tTest(renderBatches(r, kBatches, kSpp, kBlock), exact);
     };
     for (auto e : {DerivativeEstimator::SingleTerm, DerivativeEstimator::Sum}) {
@@ -237,7 +237,7 @@ TEST_F(DerivativeRender, SlabDensityThroughDebiasedMarchingAndIndependentNumbers
     // The estimate is unbiased for I(levels), whose bias h_0 2^-levels L'' / 2 is 4e-5 at the default
     // 8 levels: a third of this test's standard error (it shows as t ~ 1-3). At 12 levels it is 3e-6.
     s.levels = 12;
-    DerivativeRenderer r(sharedContext(), scene, s, 5);
+    DerivativeRenderer r(sharedContext(), resolved(scene), s, 5);
     const TSummary t = tTest(renderBatches(r, kBatches, kSpp, kBlock), exact);
     EXPECT_EQ(t.failing, 0u) << t.worst << " (threshold " << t.threshold << ")";
 
@@ -268,7 +268,7 @@ TEST_F(DerivativeRender, RefusesParametersWithoutADerivative) {
         s.step = step;
         s.estimator = e;
         try {
-            DerivativeRenderer r(sharedContext(), scene, s, 1);
+            DerivativeRenderer r(sharedContext(), resolved(scene), s, 1);
         } catch (const InputError& e) {
             EXPECT_NE(std::string(e.what()).find(expect), std::string::npos) << key << ": " << e.what();
             EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();

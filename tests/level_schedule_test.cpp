@@ -63,7 +63,7 @@ std::vector<glm::dvec3> uniformBatchMeans(const std::string& debias, uint32_t ba
     Scene scene = loadTestScene("scenes/furnace.json", {{"camera.resolution", "[8,8]"},
                                                         {"integrator.max_bounces", "2"},
                                                         {"integrator.debias", debias}});
-    Renderer renderer(sharedContext(), scene, seed);
+    Renderer renderer(sharedContext(), resolved(scene), seed);
     std::vector<glm::dvec3> means;
     glm::dvec3 previous(0.0);
     RenderRequest request;

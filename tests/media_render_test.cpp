@@ -303,5 +303,5 @@ TEST_F(MediaRender, TransmittancePilotMeasuresTheMarchingCorrection) {
     EXPECT_LE(pilot.chosen.product(), pilot.geometricDefault.product());
     std::printf("%s", pilot.summary().c_str());
 
-    // resolveAutoPmfs and the chosen pmf in the scene: Cli.PlanSaysWhichPmfAndWhy (plan runs it).
+    // resolveScene and the chosen pmf in the scene: Cli.PlanSaysWhichPmfAndWhy (plan runs it).
 }

@@ -106,7 +106,7 @@ TEST_F(PathDepthRender, FixedSeedIsRepeatable) {
 TEST_F(PathDepthRender, ExtendingARenderEqualsOneLongRender) {
     // Samples depend only on pixel, global sample index and seed: 8 + 8 spp == 16 spp.
     Scene scene = cornell(2, "", "[32,24]");
-    Renderer split(sharedContext(), scene, 9);
+    Renderer split(sharedContext(), resolved(scene), 9);
     RenderRequest r;
     r.spp = 8;
     split.render(r);

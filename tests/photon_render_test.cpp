@@ -72,7 +72,7 @@ Batches renderBatches(const Scene& scene, uint32_t batches, uint32_t samplesPerB
     Batches out;
     out.base.resize(regions);
     out.correction.resize(regions);
-    Renderer renderer(sharedContext(), scene, seed);
+    Renderer renderer(sharedContext(), resolved(scene), seed);
     std::vector<double> baseBefore(regions, 0.0), corrBefore(regions, 0.0);
     for (uint32_t b = 0; b < batches; ++b) {
         RenderRequest request;
@@ -223,7 +223,7 @@ TEST_F(PhotonRender, NextEventDirectLightMatchesThePlaneWithoutPhotonsAtTheFirst
     // first hit as well would double it.
     Scene scene = plane(R"({"type":"photon_map","photon_count":20000,"gather_radius":0.1,
                             "direct_lighting":"next_event","debias":{"estimator":"single_term"}})");
-    Renderer renderer(sharedContext(), scene, 600);
+    Renderer renderer(sharedContext(), resolved(scene), 600);
     RenderRequest request;
     request.spp = 16;
     renderer.render(request);
@@ -287,7 +287,7 @@ TEST_F(PhotonRender, SixteenMillionPhotons) {
     Scene scene = loadTestScene(kScene, {{"camera.resolution", "[16,16]"},
                                          {"integrator", R"({"type":"photon_map","photon_count":37748736,
                                            "gather_radius":0.02,"direct_lighting":"photons"})"}});
-    Renderer renderer(sharedContext(), scene, 1);
+    Renderer renderer(sharedContext(), resolved(scene), 1);
     RenderRequest request;
     request.spp = 1;
     renderer.render(request);
@@ -348,12 +348,12 @@ TEST_F(PhotonRender, GatherSlicesLeaveTheFilmUnchanged) {
                                                                         {"integrator.gather_photon_count", gatherCount}});
         RenderRequest request;
         request.spp = 3;
-        Renderer whole(sharedContext(), scene, 901);
+        Renderer whole(sharedContext(), resolved(scene), 901);
         whole.render(request);
         const uint64_t fewSlices = whole.stats().passes.at("gather").dispatches;
 
         ASSERT_EQ(setenv("TELESCOPE_GATHER_SLICE", "8", 1), 0);
-        Renderer sliced(sharedContext(), scene, 901);
+        Renderer sliced(sharedContext(), resolved(scene), 901);
         sliced.render(request);
         unsetenv("TELESCOPE_GATHER_SLICE");
         const uint64_t manySlices = sliced.stats().passes.at("gather").dispatches;
@@ -386,7 +386,7 @@ TEST_F(PhotonRender, PhotonsReadByAddressGiveTheSameFilm) {
                                                                     {"integrator.direct_lighting", R"("photons")"},
                                                                     {"integrator.photon_count", std::to_string(paths)},
                                                                     {"integrator.gather_radius", "0.05"}});
-    Renderer texels(sharedContext(), scene, 900);
+    Renderer texels(sharedContext(), resolved(scene), 900);
     RenderRequest request;
     request.spp = 3;
     texels.render(request);
@@ -400,7 +400,7 @@ TEST_F(PhotonRender, PhotonsReadByAddressGiveTheSameFilm) {
         map.reserve(paths + 1);
         EXPECT_FALSE(map.texelsFit());
     }
-    Renderer byAddress(sharedContext(), scene, 900);
+    Renderer byAddress(sharedContext(), resolved(scene), 900);
     byAddress.render(request);
     unsetenv("TELESCOPE_MAX_TEXELS");
 
@@ -420,7 +420,7 @@ namespace {
 // A render of `spp` samples stopped before its `stopAt`-th batch (a signal): its film, with the
 // samples in progress.
 Film interruptedFilm(const Scene& scene, uint32_t seed, uint64_t spp, uint32_t stopAt) {
-    Renderer renderer(sharedContext(), scene, seed);
+    Renderer renderer(sharedContext(), resolved(scene), seed);
     RenderRequest request;
     request.spp = spp;
     uint32_t asked = 0;
@@ -436,7 +436,7 @@ Film resumedFilm(const Scene& scene, uint32_t seed, const Film& film, uint64_t s
     saveCheckpoint(path, Checkpoint{film, seed, "{}", "", "", {seed}});
     const Film restored = loadCheckpoint(path).film;
     std::filesystem::remove(path);
-    Renderer renderer(sharedContext(), scene, seed);
+    Renderer renderer(sharedContext(), resolved(scene), seed);
     renderer.resume(restored);
     RenderRequest request;
     request.spp = spp - restored.samplesPerPixel();
@@ -460,7 +460,7 @@ TEST_F(PhotonRender, AnInterruptedBlockResumesWhereItStopped) {
     uint32_t seed = 1;
     while (photonBlockLevel(scene.integrator.debias, 0, seed) < 2) ++seed;  // block 0: 9 passes or more
     const uint64_t blocks = 3;
-    Renderer whole(sharedContext(), scene, seed);
+    Renderer whole(sharedContext(), resolved(scene), seed);
     RenderRequest request;
     request.spp = blocks;
     whole.render(request);
@@ -499,7 +499,7 @@ TEST_F(PhotonRender, AnInterruptedBlockResumesWhereItStopped) {
     // A block that is not this render's (another seed draws another level for block 0) is refused.
     uint32_t other = seed + 1;
     while (photonBlockLevel(scene.integrator.debias, 0, other) == p.level) ++other;
-    Renderer wrong(sharedContext(), scene, other);
+    Renderer wrong(sharedContext(), resolved(scene), other);
     EXPECT_THROW(wrong.resume(part), std::invalid_argument);
 }
 

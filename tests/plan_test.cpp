@@ -73,7 +73,7 @@ TEST(Plan, DispatchedPassesAreThePlannedOnesForEveryShippedScene) {
             overrides.push_back({"integrator.photon_count", "2000"});
             scene = loadTestScene(path, overrides);
         }
-        Renderer renderer(sharedContext(), scene, 1);
+        Renderer renderer(sharedContext(), resolved(scene), 1);
         RenderRequest request;
         request.spp = 1;
         renderer.render(request);
@@ -90,7 +90,7 @@ TEST(Plan, TheComparisonSeesAPassThePlanLeavesOut) {
     // The positive control of the comparison above: a plan that drops one of its passes differs.
     Scene scene = loadTestScene("scenes/cornell-box-caustic.json",
                                 {{"camera.resolution", "[8, 8]"}, {"integrator.photon_count", "2000"}});
-    Renderer renderer(sharedContext(), scene, 1);
+    Renderer renderer(sharedContext(), resolved(scene), 1);
     RenderRequest request;
     request.spp = 1;
     renderer.render(request);

@@ -18,8 +18,10 @@ Scene loadTestScene(const std::string& relative, const std::vector<SceneOverride
     return loadScene(sourcePath(relative), overrides);
 }
 
+ResolvedScene resolved(const Scene& scene, uint32_t seed) { return resolveScene(sharedContext(), scene, seed).scene; }
+
 Film renderFilm(const Scene& scene, uint64_t spp, uint32_t seed) {
-    Renderer renderer(sharedContext(), scene, seed);
+    Renderer renderer(sharedContext(), resolved(scene), seed);
     RenderRequest request;
     request.spp = spp;
     renderer.render(request);
@@ -31,7 +33,7 @@ std::vector<std::vector<glm::dvec3>> regionBatchMeans(const Scene& scene, uint32
                                                       uint32_t samplesPerBatch, uint32_t seed) {
     std::vector<std::vector<glm::dvec3>> out;
     std::vector<glm::dvec3> before;
-    Renderer renderer(sharedContext(), scene, seed);
+    Renderer renderer(sharedContext(), resolved(scene), seed);
     for (uint32_t b = 0; b < batches; ++b) {
         RenderRequest request;
         request.spp = samplesPerBatch;

@@ -11,6 +11,7 @@
 
 #include "gpu/context.h"
 #include "render/film.h"
+#include "render/pmf_pilot.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 
@@ -19,6 +20,9 @@ namespace telescope::test {
 gpu::Context& sharedContext();
 std::string sourcePath(const std::string& relative);
 Scene loadTestScene(const std::string& relative, const std::vector<SceneOverride>& overrides = {});
+// The scene as a Renderer takes it (render/resolved_scene.h), on the shared context: a pilot
+// runs only for a pmf "auto" (seeded from `seed`).
+ResolvedScene resolved(const Scene& scene, uint32_t seed = 1);
 Film renderFilm(const Scene& scene, uint64_t spp, uint32_t seed);
 
 // Batch means of one render, [region][batch], per colour channel: `batches` renders of

@@ -17,7 +17,7 @@ TEST(RenderOwnership, ARenderDoesNotReadTheSceneItWasMadeFrom) {
          {"integrator.debias", R"({"estimator":"sum","pmf":{"type":"geometric","r":0.5}})"}}));
     const Film expected = test::renderFilm(*scene, 2, 3);
 
-    Renderer renderer(test::sharedContext(), *scene, 3);
+    Renderer renderer(test::sharedContext(), test::resolved(*scene), 3);
     *scene = Scene{};
     scene.reset();
     RenderRequest request;

@@ -315,7 +315,7 @@ private:
 };
 
 RenderStats renderWithStats(const Scene& scene, uint64_t spp, uint32_t seed, Film& film) {
-    Renderer renderer(sharedContext(), scene, seed);
+    Renderer renderer(sharedContext(), resolved(scene), seed);
     RenderRequest request;
     request.spp = spp;
     renderer.render(request);
@@ -584,7 +584,7 @@ double residentBytes() {
 
 // How much the process grows per one-sample render, over `passes` of them after a few to settle.
 double growthPerPass(const Scene& scene, uint32_t passes) {
-    Renderer renderer(sharedContext(), scene, 5);
+    Renderer renderer(sharedContext(), resolved(scene), 5);
     RenderRequest one;
     one.spp = 1;
     for (int i = 0; i < 4; ++i) renderer.render(one);

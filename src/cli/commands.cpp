@@ -199,7 +199,7 @@ int runDerivativeRender(const CommonOptions& common, const RenderOptions& option
     reportIgnoredKeys(scene, common.quiet);
     keepCheckpointsOnFailure({output.checkpointPath, o.resumePath});
     gpu::Context context(contextOptions(common));
-    DerivativeRenderer renderer(context, scene, settings, o.seed);
+    DerivativeRenderer renderer(context, resolve(context, scene, o.seed, common.quiet), settings, o.seed);
     const std::string settingsNow = derivativeSettingsAsRun(scene, renderer);
     if (resume) {
         // Compared on the settings as run (a key that differs is named); checkpoints that do not
@@ -272,29 +272,29 @@ int runDerivativeRender(const CommonOptions& common, const RenderOptions& option
 
 int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
     RenderOptions o = optionsIn;
-    Scene scene = loadWithOverrides(common);
-    if (!o.derivative.key.empty()) return runDerivativeRender(common, o, scene);
+    Scene loaded = loadWithOverrides(common);
+    if (!o.derivative.key.empty()) return runDerivativeRender(common, o, loaded);
     InterruptGuard interrupts;
     if (o.output.checkpointPath.empty() && o.checkpointEvery > 0) o.output.checkpointPath = o.output.exrPath + ".checkpoint";
     checkImageOutputs(o.output);
     if (!o.statsPath.empty()) checkOutputPath(o.statsPath, "--stats-json", ".json");
     std::optional<Checkpoint> resume;
     if (!o.resumePath.empty()) {
-        if (const char* key = autoPmfKey(scene.integrator); *key)
-            throw InputError(scene.path, key,
+        if (const char* key = autoPmfKey(loaded.integrator); *key)
+            throw InputError(loaded.path, key,
                              "a render with pmf \"auto\" cannot be resumed: put the pmf its pilot chose in the scene");
         resume = loadCheckpoint(o.resumePath);
         if (!o.seedGiven) o.seed = resume->seed;
-        checkResumable(*resume, o.resumePath, scene, o.seed);
+        checkResumable(*resume, o.resumePath, loaded, o.seed);
     }
-    reportIgnoredKeys(scene, common.quiet);
+    reportIgnoredKeys(loaded, common.quiet);
 
     // A runtime failure (device lost, out of memory) names the checkpoints it leaves (main.cpp).
     keepCheckpointsOnFailure({o.output.checkpointPath, o.resumePath});
     gpu::Context context(contextOptions(common));
-    for (const PmfPilotResult& pilot : resolveAutoPmfs(context, scene, o.seed))
-        if (!common.quiet) fmt::print(stderr, "{}", pilot.summary());
-    Renderer renderer(context, scene, o.seed);
+    const ResolvedScene resolved = resolve(context, std::move(loaded), o.seed, common.quiet);
+    const Scene& scene = resolved.scene();
+    Renderer renderer(context, resolved, o.seed);
     if (resume) {
         resumeFrom(renderer, *resume, o.resumePath, scene);
     }
@@ -365,6 +365,10 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
     checkImageOutputs(o.output);
     std::optional<Checkpoint> resume;
     if (fs::exists(o.output.checkpointPath)) {
+        if (const char* key = autoPmfKey(scene.integrator); *key)
+            throw InputError(scene.path, key,
+                             "a reference with pmf \"auto\" cannot be resumed from its checkpoint (another pilot may "
+                             "choose another pmf): put the pmf its pilot chose in the scene");
         resume = loadCheckpoint(o.output.checkpointPath);
         checkResumable(*resume, o.output.checkpointPath, scene, o.seed);
     }
@@ -378,7 +382,9 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
 
     keepCheckpointsOnFailure({o.output.checkpointPath});
     gpu::Context context(contextOptions(common));
-    Renderer renderer(context, scene, o.seed);
+    const ResolvedScene resolved = resolve(context, std::move(scene), o.seed, common.quiet);
+    scene = resolved.scene();  // what the outputs record: every pmf as run
+    Renderer renderer(context, resolved, o.seed);
     if (resume) {
         resumeFrom(renderer, *resume, o.output.checkpointPath, scene);
     }
@@ -447,7 +453,7 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
 int runConverge(const CommonOptions& common, const ConvergeOptionsCli& c) {
     ConvergeOptions o;
     o.scenePath = common.scenePath;
-    for (const auto& s : common.sets) o.sets.push_back(parseOverride(s));
+    o.load = [&common](const std::vector<SceneOverride>& method) { return loadWithOverrides(common, method); };
     o.referencePath = c.referencePath;
     if (!c.derivative.key.empty()) {
         // Derivative estimators compared against a derivative reference (render --derivative).
@@ -558,7 +564,7 @@ std::string photonBudgetText(const DebiasSettings& d, double timeLimit, double p
 // Seconds per photon pass of this scene on this device: eight passes after two (the first ones
 // size the photon map and may run again), setup not counted.
 double measurePhotonPassSeconds(gpu::Context& context, const Scene& scene) {
-    Renderer renderer(context, scene, kDefaultSeed);
+    Renderer renderer(context, resolve(context, scene, kDefaultSeed, true), kDefaultSeed);
     auto passes = [&](uint32_t batches) {
         RenderRequest request;
         request.spp = 1u << 20;
@@ -582,7 +588,7 @@ int runPlan(const CommonOptions& common, const DerivativeCli& derivative, double
         // The versions' checks need the device (the renderer's buffers): plan builds one.
         const DerivativeSettings settings = derivativeSettings(derivative);
         gpu::Context context(contextOptions(common));
-        DerivativeRenderer renderer(context, scene, settings, kDefaultSeed);
+        DerivativeRenderer renderer(context, resolve(context, scene, kDefaultSeed, common.quiet), settings, kDefaultSeed);
         Scene base = scene;
         base.integrator.russianRoulette = false;
         fmt::print("{}{}", describePlan(base, renderer.renderer().plan()), renderer.planText());
@@ -606,8 +612,9 @@ int runPlan(const CommonOptions& common, const DerivativeCli& derivative, double
         // pmf "auto": plan runs the pilots a render would run (they need the device) and prints
         // what they measured, the pmf they chose and its predicted work x variance.
         gpu::Context context(contextOptions(common));
-        Scene resolved = scene;
-        const std::vector<PmfPilotResult> pilots = resolveAutoPmfs(context, resolved, kDefaultSeed);
+        const Resolution resolution = resolveScene(context, scene, kDefaultSeed);
+        const Scene& resolved = resolution.scene.scene();
+        const std::vector<PmfPilotResult>& pilots = resolution.pilots;
         fmt::print("pmf pilots (seed {}; a render runs them again with its own seed, and timings vary):\n", kDefaultSeed);
         for (const PmfPilotResult& pilot : pilots) {
             const bool marching = pilot.kind == PilotKind::Transmittance;

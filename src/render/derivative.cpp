@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "render/pmf_pilot.h"
 #include "render/render_plan.h"
 #include "scene/scene_loader.h"
 #include "scene/scene_overrides.h"
@@ -74,9 +75,10 @@ struct DerivativeRenderer::Version {
     Camera camera;
 };
 
-DerivativeRenderer::DerivativeRenderer(gpu::Context& context, const Scene& scene, const DerivativeSettings& settings,
-                                       uint32_t seed)
-    : context_(context), scene_(scene), settings_(settings), seed_(seed) {
+DerivativeRenderer::DerivativeRenderer(gpu::Context& context, const ResolvedScene& resolved,
+                                       const DerivativeSettings& settings, uint32_t seed)
+    : context_(context), scene_(resolved.scene()), settings_(settings), seed_(seed) {
+    const Scene& scene = resolved.scene();
     const std::string& file = scene.path;
     const std::string& key = settings.key;
     parameter_.key = key;
@@ -102,7 +104,7 @@ DerivativeRenderer::DerivativeRenderer(gpu::Context& context, const Scene& scene
 
     // ---- The base: roulette off ----
     scene_.integrator.russianRoulette = false;
-    renderer_ = std::make_unique<Renderer>(context, scene_, seed);
+    renderer_ = std::make_unique<Renderer>(context, resolveScene(context, scene_, seed).scene, seed);  // no pilot: explicit pmfs
     film_ = Film(scene.camera.width, scene.camera.height);
 
     if (settings.step > 0.0) {

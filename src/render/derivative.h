@@ -95,7 +95,7 @@ public:
     // is not a number, is discrete, lies in the integrator or renderer settings, cannot be varied
     // by +-h_0 (the scene refuses the value), changes nothing, or changes the render's plan or
     // buffer sizes; and for integrators that are not the path tracer.
-    DerivativeRenderer(gpu::Context& context, const Scene& scene, const DerivativeSettings& settings, uint32_t seed);
+    DerivativeRenderer(gpu::Context& context, const ResolvedScene& scene, const DerivativeSettings& settings, uint32_t seed);
     ~DerivativeRenderer();
 
     const DerivativeParameter& parameter() const { return parameter_; }

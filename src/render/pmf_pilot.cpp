@@ -230,7 +230,7 @@ PmfPilotResult runPmfPilot(gpu::Context& context, const Scene& sceneIn, uint32_t
     s.integrator.debias.estimator = DebiasEstimator::SingleTerm;
     s.integrator.debias.pmf = PmfSettings{};
     s.integrator.debias.schedule = LevelSchedule::PerPixel;
-    Renderer r(context, s, seed + 7919u, PlanOptions{0, PilotKind::PathDepth});
+    Renderer r(context, resolveScene(context, s, seed).scene, seed + 7919u, PlanOptions{0, PilotKind::PathDepth});
     std::vector<glm::dvec3> weight;
     double pixels = 0.0;
     for (uint32_t m = 0; m < settings.pilotLevels; ++m) {
@@ -301,7 +301,7 @@ PmfPilotResult runTransmittancePmfPilot(gpu::Context& context, const Scene& scen
     }
     s.integrator.russianRoulette = false;  // survival would depend on the weighted correction
     s.integrator.transmittance.pmf = defaultTransmittancePmf();
-    Renderer r(context, s, seed + 7919u, PlanOptions{0, PilotKind::Transmittance});
+    Renderer r(context, resolveScene(context, s, seed).scene, seed + 7919u, PlanOptions{0, PilotKind::Transmittance});
     const size_t pixelCount = size_t(s.camera.width) * s.camera.height;
     const double pixels = double(pixelCount);
     std::vector<glm::dvec3> weight(pixelCount), baseSum(pixelCount), baseSq(pixelCount);
@@ -402,7 +402,7 @@ std::string PmfPilotResult::summary() const {
     return s;
 }
 
-std::vector<PmfPilotResult> resolveAutoPmfs(gpu::Context& context, Scene& scene, uint32_t seed) {
+Resolution resolveScene(gpu::Context& context, Scene scene, uint32_t seed) {
     std::vector<PmfPilotResult> pilots;
     const char* chosen = "chosen by the auto pilot: the lowest predicted work x variance over geometric and power-law pmfs";
     // Transmittance first: its pilot traces paths to the base depth only, and the path-depth
@@ -424,7 +424,7 @@ std::vector<PmfPilotResult> resolveAutoPmfs(gpu::Context& context, Scene& scene,
         d.pmf = pilots.back().chosen.pmf;
         d.pmf.origin = chosen;
     }
-    return pilots;
+    return Resolution{ResolvedScene(std::move(scene)), std::move(pilots)};
 }
 
 }  // namespace telescope

@@ -27,6 +27,7 @@
 
 #include "gpu/context.h"
 #include "render/render_plan.h"
+#include "render/resolved_scene.h"
 #include "scene/scene.h"
 
 namespace telescope {
@@ -104,9 +105,13 @@ void choosePmf(PmfPilotResult& pilot, DebiasEstimator estimator);
 
 // Resolves every pmf "auto" of the scene (debiased ray marching's pmf, then the path-depth pmf,
 // whose pilot so renders with the transmittance pmf the render will use): runs each one's pilot
-// and puts the chosen pmf in the scene. Returns the pilots that ran, in that order (none when the
-// scene has no "auto"). A transmittance "auto" in a scene without media has nothing to measure
-// and becomes the default pmf (it cannot change the image).
-std::vector<PmfPilotResult> resolveAutoPmfs(gpu::Context& context, Scene& scene, uint32_t seed);
+// (seeded from `seed`) and puts the chosen pmf in the scene. `pilots` are those that ran, in that
+// order (none when the scene has no "auto"). A transmittance "auto" in a scene without media has
+// nothing to measure and becomes the default pmf (it cannot change the image).
+struct Resolution {
+    ResolvedScene scene;
+    std::vector<PmfPilotResult> pilots;
+};
+Resolution resolveScene(gpu::Context& context, Scene scene, uint32_t seed);
 
 }  // namespace telescope

@@ -9,8 +9,11 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
+#include "render/derivative.h"
+#include "render/renderer.h"
 #include "shared/gpu_types.h"
 
 using namespace telescope;
@@ -77,3 +80,12 @@ TEST(ShaderFeatures, PlanNamesEachValueByTheTable) {
     ASSERT_NE(specConstantInfo(kSpecGatherSliceLength), nullptr);
     EXPECT_STREQ(specConstantInfo(kSpecGatherSliceLength)->name, "kGatherSliceLength");
 }
+
+// The Renderer and the DerivativeRenderer are made from a ResolvedScene only, and only
+// resolveScene makes one (render/resolved_scene.h): a scene with a pmf "auto" cannot reach them
+// unresolved. Compile-time checks; each fails if a constructor from a plain Scene is added.
+static_assert(!std::is_constructible_v<Renderer, gpu::Context&, const Scene&, uint32_t>);
+static_assert(!std::is_constructible_v<DerivativeRenderer, gpu::Context&, const Scene&, const DerivativeSettings&, uint32_t>);
+static_assert(!std::is_constructible_v<ResolvedScene, Scene>);
+static_assert(!std::is_convertible_v<Scene, ResolvedScene>);
+static_assert(std::is_constructible_v<Renderer, gpu::Context&, const ResolvedScene&, uint32_t>);

@@ -17,11 +17,10 @@ double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(
 constexpr uint32_t kMaxDispatchesPerBatch = 64;
 }  // namespace
 
-Renderer::Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, const PlanOptions& options)
-    : context_(context), camera_(scene.camera), integrator_(scene.integrator), seed_(seed) {
+Renderer::Renderer(gpu::Context& context, const ResolvedScene& resolved, uint32_t seed, const PlanOptions& options)
+    : context_(context), camera_(resolved.scene().camera), integrator_(resolved.scene().integrator), seed_(seed) {
+    const Scene& scene = resolved.scene();
     auto start = Clock::now();
-    if (*autoPmfKey(scene.integrator) != '\0')
-        throw std::logic_error("the auto pmf must be resolved by a pilot (resolveAutoPmf) before rendering");
     gpuScene_ = buildGpuScene(scene);
     plan_ = makeRenderPlan(scene, gpuScene_.features, options);
     stats_.sceneSeconds = secondsSince(start);

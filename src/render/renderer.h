@@ -25,6 +25,7 @@
 #include "render/film.h"
 #include "render/gpu_scene.h"
 #include "render/render_plan.h"
+#include "render/resolved_scene.h"
 #include "render/sample_passes.h"
 #include "scene/scene.h"
 
@@ -90,8 +91,8 @@ struct RenderStats {
 class Renderer {
 public:
     // options: how the plan runs the integrator beyond the scene's settings (render_plan.h); the
-    // default for a render.
-    Renderer(gpu::Context& context, const Scene& scene, uint32_t seed, const PlanOptions& options = {});
+    // default for a render. The scene's pmfs are explicit (render/resolved_scene.h).
+    Renderer(gpu::Context& context, const ResolvedScene& scene, uint32_t seed, const PlanOptions& options = {});
     ~Renderer();
 
     const RenderPlan& plan() const { return plan_; }

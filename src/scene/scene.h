@@ -308,7 +308,7 @@ struct IntegratorSettings {
 inline bool usesPhotons(const IntegratorSettings& s) { return s.type != IntegratorType::PathTracer; }
 
 // The scene key of a pmf "auto" that a pilot has not yet resolved (render/pmf_pilot.h
-// resolveAutoPmf), or "" when there is none: the path-depth pmf first, then the transmittance's.
+// resolveScene), or "" when there is none: the path-depth pmf first, then the transmittance's.
 inline const char* autoPmfKey(const IntegratorSettings& s) {
     if (s.debias.estimator != DebiasEstimator::None && s.debias.pmf.type == PmfType::Auto) return "integrator.debias.pmf.type";
     if (s.transmittance.type == TransmittanceEstimatorType::DebiasedRayMarch && s.transmittance.pmf.type == PmfType::Auto)

@@ -1,5 +1,6 @@
-// The settings as JSON, both ways: what resolvedSettings writes, applySettings reads back into a
-// scene whose settings were all different, for every shipped scene and a few patched ones.
+// The settings as JSON, both ways: what resolvedSettings writes, reproduceScene puts into a
+// document whose settings were all different and reads back with the scene file's reader, for
+// every shipped scene and a few patched ones.
 #include "scene/settings_json.h"
 
 #include <algorithm>
@@ -20,39 +21,36 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-// A scene whose every recorded setting differs from the shipped scenes' (a photon-mapped box with
-// a medium would be rejected, so the photon and media parts are set directly).
-Scene allDifferent() {
-    Scene s;
-    s.integrator.type = IntegratorType::ProgressivePhotonMap;
-    s.integrator.minBounces = 7;
-    s.integrator.maxBounces = 9;
-    s.integrator.enableLightSampling = false;
-    s.integrator.enableTwoSidedShading = false;
-    s.integrator.debias.estimator = DebiasEstimator::Sum;
-    s.integrator.debias.pmf = {PmfType::PowerLaw, 0.1f, 0.3f, 3, 5, "elsewhere"};
-    s.integrator.debias.schedule = LevelSchedule::Queued;
-    s.integrator.debias.photon = {0.3f, 7, 3};
-    s.integrator.debias.testPmfWeight = 2.0f;
-    s.integrator.photon = {5, 0.5f, 0.1f, PhotonKernel::Epanechnikov, DirectLighting::Photons};
-    s.integrator.transmittance = {TransmittanceEstimatorType::RatioTracking, 9, {PmfType::PowerLaw, 0.1f, 0.2f, 1, 3, "x"}};
-    s.camera.width = 3;
-    s.camera.height = 5;
-    s.camera.fovDegrees = 11.0f;
-    s.camera.filter = PixelFilter::Lanczos;
-    return s;
+// The scene's document with every recorded setting different: another integrator (another type,
+// bounces, switches, estimator, pmf and schedule) and another camera resolution, field of view
+// and filter. Only the recorded settings can bring the scene's back.
+std::string allDifferent(const Scene& scene) {
+    json doc = scene.document;
+    doc["integrator"] = json::parse(R"({"type": "path_tracer", "min_bounces": 7, "max_bounces": 9,
+        "enable_light_sampling": false, "enable_two_sided_shading": false,
+        "debias": {"estimator": "sum", "pmf": {"type": "power_law", "alpha": 0.3, "origin": "elsewhere"},
+                   "level_schedule": "queued", "test_pmf_weight": 2.0}})");
+    if (!scene.media.empty())
+        doc["integrator"]["transmittance_estimator"] = json::parse(R"({"type": "ratio_tracking", "level": 9})");
+    doc["camera"]["resolution"] = {3, 5};
+    doc["camera"]["fov"] = 11.0;
+    doc["camera"]["reconstruction_filter"] = "lanczos";
+    return doc.dump();
+}
+
+Scene reproduced(const Scene& scene, const json& recorded) {
+    return reproduceScene(allDifferent(scene), scene.path, recorded.dump());
 }
 
 void expectRoundTrip(const Scene& scene, const std::string& what) {
     const json recorded = resolvedSettings(scene);
-    Scene other = allDifferent();
-    other.media = scene.media;  // what decides whether the transmittance estimator is recorded
-    applySettings(other, recorded, what);
+    const Scene other = reproduced(scene, recorded);
     EXPECT_EQ(resolvedSettings(other), recorded) << what;
     EXPECT_EQ(other.camera.width, scene.camera.width) << what;
-    if (scene.integrator.debias.estimator != DebiasEstimator::None) {
-        EXPECT_EQ(other.integrator.debias.pmf.origin, scene.integrator.debias.pmf.origin) << what;
-    }
+    EXPECT_EQ(other.integrator.debias.pmf.origin, scene.integrator.debias.pmf.origin) << what;
+    EXPECT_EQ(other.integrator.transmittance.pmf.origin, scene.integrator.transmittance.pmf.origin) << what;
+    // Every recorded key is one the reader uses: none is reported as ignored.
+    for (const std::string& key : other.ignoredKeys) EXPECT_NE(key.rfind("integrator", 0), 0u) << what << ": " << key;
 }
 
 TEST(SettingsJson, EveryShippedSceneRoundTrips) {
@@ -83,34 +81,54 @@ TEST(SettingsJson, PatchedSettingsRoundTrip) {
     expectRoundTrip(loadScene(TELESCOPE_SOURCE_DIR "/scenes/point-plane-photon.json",
                               {{"integrator.kernel", R"("epanechnikov")"}, {"integrator.direct_lighting", R"("photons")"}}),
                     "photon kernel and direct lighting");
+    expectRoundTrip(loadScene(TELESCOPE_SOURCE_DIR "/scenes/point-plane-photon.json",
+                              {{"integrator.type", R"("progressive_photon_map")"},
+                               {"integrator.debias", R"({"estimator":"single_term","pmf":{"type":"geometric","r":0.6},
+                                                          "area_ratio":0.6,"photon_growth":2,"level_cap":9})"}}),
+                    "unbiased progressive photon mapping's blocks");
     expectRoundTrip(loadScene(TELESCOPE_SOURCE_DIR "/scenes/smoke-box.json",
                               {{"integrator.transmittance_estimator", R"({"type":"debiased_ray_march","level":3,
                                                                           "pmf":{"type":"power_law","alpha":0.5}})"}}),
                     "debiased ray marching with a power-law pmf");
+    // A pilot's pmf: what resolveScene puts in the scene, with its reason.
+    Scene piloted = loadScene(box, {{"integrator.debias", R"({"estimator":"sum","pmf":{"type":"auto"}})"}});
+    piloted.integrator.debias.pmf = {PmfType::Geometric, 0.41f, 0.6f, 4, 8, "chosen by the auto pilot"};
+    expectRoundTrip(piloted, "a pilot's pmf");
 }
 
-// The control of the round trip: a key left out of the JSON keeps the other scene's value.
+// The control of the round trip: a recorded key left out keeps the other document's value.
 TEST(SettingsJson, AMissingKeyIsNotRestored) {
     const Scene box = loadScene(TELESCOPE_SOURCE_DIR "/scenes/cornell-box.json");
     json recorded = resolvedSettings(box);
-    recorded["integrator"].erase("max_bounces");
-    Scene other = allDifferent();
-    applySettings(other, recorded, "test");
+    recorded["camera"].erase("fov");
+    const Scene other = reproduced(box, recorded);
     EXPECT_NE(resolvedSettings(other), resolvedSettings(box));
-    EXPECT_EQ(other.integrator.maxBounces, 9u);
+    EXPECT_EQ(other.camera.fovDegrees, 11.0f);
 }
 
-TEST(SettingsJson, BadSettingsNameTheSource) {
-    Scene s;
-    try {
-        applySettings(s, json::parse(R"({"integrator": {"kernel": "gaussian"}})"), "render.exr");
-        FAIL() << "an unknown kernel was accepted";
-    } catch (const InputError& e) {
-        EXPECT_EQ(e.file(), "render.exr");
-        EXPECT_EQ(e.key(), "integrator");
-        EXPECT_NE(std::string(e.what()).find("gaussian"), std::string::npos) << e.what();
-    }
-    EXPECT_THROW(applySettings(s, json::parse(R"({"camera": {"fov": "wide"}})"), "render.exr"), InputError);
+// Recorded settings are read by the scene file's reader: a bad value is refused as in a scene
+// file, naming the file and the key.
+TEST(SettingsJson, BadSettingsNameTheFileAndKey) {
+    const Scene box = loadScene(TELESCOPE_SOURCE_DIR "/scenes/point-plane-photon.json");
+    auto refusal = [&](const std::string& settings) -> std::pair<std::string, std::string> {
+        try {
+            reproduceScene(box.document.dump(), box.path, settings);
+        } catch (const InputError& e) {
+            EXPECT_EQ(e.file(), box.path);
+            return {e.key(), e.what()};
+        }
+        ADD_FAILURE() << "accepted: " << settings;
+        return {};
+    };
+    json recorded = resolvedSettings(box);
+    recorded["integrator"]["kernel"] = "gaussian";
+    const auto [kernelKey, kernelWhy] = refusal(recorded.dump());
+    EXPECT_EQ(kernelKey, "integrator.kernel");
+    EXPECT_NE(kernelWhy.find("gaussian"), std::string::npos) << kernelWhy;
+    EXPECT_EQ(refusal(R"({"camera": {"fov": "wide"}})").first, "camera.fov");
+    EXPECT_EQ(refusal(R"({"integrator": {"type": "path_tracer", "debias": {"estimator": "sum",
+                          "pmf": {"type": "geometric", "origin": 3}}}})").first, "integrator.debias.pmf.origin");
+    EXPECT_EQ(refusal("[1, 2]").first, "settings");
 }
 
 }  // namespace

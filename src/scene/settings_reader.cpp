@@ -320,7 +320,9 @@ PmfSettings SceneReader::readPmf(const json& v, const std::string& key, PmfSetti
         if (!(x > 0.0f && x < 1.0f)) fail(fieldKey, fmt::format("{} must be in (0, 1), got {}", field, x));
         return x;
     };
+    // Why this pmf: recorded settings (settings_json.h) carry the pilot's or the default's reason.
     pmf.origin = "given in the scene";
+    if (const json* origin = find(v, "origin")) pmf.origin = string(*origin, member(key, "origin"));
     const std::optional<PmfType> pmfType = valueOf(kPmfTypeNames, type);
     if (!pmfType || (*pmfType == PmfType::Auto && !allowAuto))
         fail(member(key, "type"), fmt::format("unknown pmf type '{}' (expected {})", type,
@@ -328,15 +330,15 @@ PmfSettings SceneReader::readPmf(const json& v, const std::string& key, PmfSetti
     pmf.type = *pmfType;
     switch (*pmfType) {
         case PmfType::Geometric:
-            rejectUnknownKeys(v, key, {"type", "r"});
+            rejectUnknownKeys(v, key, {"type", "r", "origin"});
             if (find(v, "r")) pmf.r = openUnit("r");
             break;
         case PmfType::PowerLaw:
-            rejectUnknownKeys(v, key, {"type", "alpha"});
+            rejectUnknownKeys(v, key, {"type", "alpha", "origin"});
             if (find(v, "alpha")) pmf.alpha = openUnit("alpha");
             break;
         case PmfType::Auto:
-            rejectUnknownKeys(v, key, {"type", "pilot_spp", "pilot_levels"});
+            rejectUnknownKeys(v, key, {"type", "pilot_spp", "pilot_levels", "origin"});
             if (const json* s = find(v, "pilot_spp")) pmf.pilotSpp = integer(*s, member(key, "pilot_spp"), 1, 1024);
             if (const json* l = find(v, "pilot_levels")) pmf.pilotLevels = integer(*l, member(key, "pilot_levels"), 3, 32);
             break;

@@ -15,6 +15,7 @@
 #include "scene/enum_names.h"
 #include "scene/settings_json.h"
 #include "render/image_output.h"
+#include "render/pmf_pilot.h"
 #include "scene/scene_loader.h"
 
 namespace fs = std::filesystem;
@@ -38,10 +39,18 @@ std::string pendingBlockText(uint64_t block, uint32_t level, uint32_t done, uint
     return fmt::format("block {} in progress (level {}, {} of {} photon passes)", block, level, done, total);
 }
 
-Scene loadWithOverrides(const CommonOptions& o) {
+Scene loadWithOverrides(const CommonOptions& o, const std::vector<SceneOverride>& more) {
     std::vector<SceneOverride> overrides;
     for (const auto& s : o.sets) overrides.push_back(parseOverride(s));
+    overrides.insert(overrides.end(), more.begin(), more.end());
     return loadScene(o.scenePath, overrides);
+}
+
+ResolvedScene resolve(gpu::Context& context, Scene scene, uint32_t seed, bool quiet) {
+    Resolution r = resolveScene(context, std::move(scene), seed);
+    if (!quiet)
+        for (const PmfPilotResult& pilot : r.pilots) fmt::print(stderr, "{}", pilot.summary());
+    return std::move(r.scene);
 }
 
 // ---- Derivative renders (render/derivative.h) ----

@@ -12,8 +12,10 @@
 #include "gpu/context.h"
 #include "render/film.h"
 #include "render/derivative.h"
+#include "render/resolved_scene.h"
 #include "render/film_io.h"
 #include "scene/scene.h"
+#include "scene/scene_overrides.h"
 #include "session/options.h"
 
 namespace telescope::session {
@@ -26,8 +28,13 @@ std::string firstDifference(const std::string& a, const std::string& b);
 // that a checkpoint keeps (Film::pending, CheckpointHeader's pending fields).
 std::string pendingBlockText(uint64_t block, uint32_t level, uint32_t done, uint32_t total);
 
-// The scene file with the --set overrides applied (throws InputError naming the file and key).
-Scene loadWithOverrides(const CommonOptions& o);
+// The scene file with the --set overrides applied, then `more` (a converge method's; throws
+// InputError naming the file and key).
+Scene loadWithOverrides(const CommonOptions& o, const std::vector<SceneOverride>& more = {});
+// The scene with every pmf "auto" resolved by its pilot (render/pmf_pilot.h; seeded from the
+// render's seed), each pilot's summary printed to stderr unless quiet: what render, reference,
+// plan and view build their renderers from.
+ResolvedScene resolve(gpu::Context& context, Scene scene, uint32_t seed, bool quiet);
 void reportIgnoredKeys(const Scene& scene, bool quiet);
 // --derivative and its options as settings; throws InputError naming the option.
 DerivativeSettings derivativeSettings(const DerivativeOptions& d);

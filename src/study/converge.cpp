@@ -122,11 +122,7 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
 
     // ---- Everything that can be bad input is checked before any rendering ----
     std::vector<Scene> scenes;
-    for (const auto& m : o.methods) {
-        std::vector<SceneOverride> overrides = o.sets;
-        overrides.insert(overrides.end(), m.overrides.begin(), m.overrides.end());
-        scenes.push_back(loadScene(o.scenePath, overrides));
-    }
+    for (const auto& m : o.methods) scenes.push_back(o.load(m.overrides));
     if (!fs::exists(o.referencePath)) throw InputError(o.referencePath, "", "reference image not found");
     RgbImage reference;
     try {
@@ -172,10 +168,12 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
         Film firstFilm;
         for (uint32_t si = 0; si < o.seedCount; ++si) {
             const uint32_t seed = o.seed + si;
-            Scene scene = scenes[mi];
-            // A pilot's time is part of the method's cost: its curve starts after it.
+            // A pilot's time is part of the method's cost: its curve starts after it. Each seed
+            // runs its own pilots (a pmf chosen from the first seed's would tie the runs together).
+            const Resolution resolution = resolveScene(context, scenes[mi], seed);
+            const Scene& scene = resolution.scene.scene();
             PmfPilotResult pilot;  // the pilots' times, summed
-            for (const PmfPilotResult& one : resolveAutoPmfs(context, scene, seed)) {
+            for (const PmfPilotResult& one : resolution.pilots) {
                 log(one.summary());
                 const PmfSettings& c = one.chosen.pmf;
                 summary.pilotChoices += fmt::format("{}{}{}", summary.pilotChoices.empty() ? "" : ", ",
@@ -192,9 +190,9 @@ ConvergeReport runConverge(gpu::Context& context, const ConvergeOptions& o) {
             if (o.derivative) {
                 DerivativeSettings d = o.derivativeSettings;
                 d.estimator = o.derivativeEstimators.at(mi);
-                derivative = std::make_unique<DerivativeRenderer>(context, scene, d, seed);
+                derivative = std::make_unique<DerivativeRenderer>(context, resolution.scene, d, seed);
             } else {
-                radiance = std::make_unique<Renderer>(context, scene, seed);
+                radiance = std::make_unique<Renderer>(context, resolution.scene, seed);
             }
             const Renderer& renderer = derivative ? derivative->renderer() : *radiance;
             auto wallSeconds = [&] { return derivative ? derivative->seconds() : renderer.stats().wallSeconds; };

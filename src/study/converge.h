@@ -25,7 +25,9 @@ namespace telescope {
 
 struct ConvergeOptions {
     std::string scenePath;
-    std::vector<SceneOverride> sets;  // applied before each method's overrides
+    // The scene with the command's --set overrides and then a method's (session::loadWithOverrides):
+    // one loader for every front end. Throws InputError naming the file and key.
+    std::function<Scene(const std::vector<SceneOverride>&)> load;
     std::string referencePath;        // an EXR from `telescope reference` (or `render`)
     std::vector<Method> methods;
     double timeBudget = 0.0;          // render seconds per method, split into `slices` doubling slices

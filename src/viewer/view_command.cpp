@@ -103,12 +103,12 @@ float pivotDistance(const Scene& scene) {
 // ---- The viewer: the Renderer, its camera, what is shown, the input ----
 class Viewer {
 public:
-    Viewer(gpu::Context& context, Window& window, Presenter& presenter, Scene scene, const ViewOptions& options,
-           bool quiet)
+    Viewer(gpu::Context& context, Window& window, Presenter& presenter, const ResolvedScene& scene,
+           const ViewOptions& options, bool quiet)
         : context_(context),
           window_(window),
           presenter_(presenter),
-          sceneAsLoaded_(std::move(scene)),
+          sceneAsLoaded_(scene.scene()),
           options_(options),
           quiet_(quiet) {
         home_ = OrbitCamera::fromCamera(sceneAsLoaded_.camera, pivotDistance(sceneAsLoaded_));
@@ -202,13 +202,13 @@ private:
             // A derivative render reads its versions from the document (the moved camera too):
             // a new one per camera, with its own Renderer.
             derivative_.reset();
-            derivative_ = std::make_unique<DerivativeRenderer>(context_, *scene_, derivativeSettings_, options_.seed);
+            derivative_ = std::make_unique<DerivativeRenderer>(context_, resolved(), derivativeSettings_, options_.seed);
             derivativeAccum_ = gpu::Buffer(context_, derivative_->film().compensatedPairs().size() * sizeof(glm::vec4),
                                            "derivative display");
             derivativeAccum_.fill(0);
             inPlace = false;
         } else if (!inPlace) {
-            renderer_ = std::make_unique<Renderer>(context_, *scene_, options_.seed);
+            renderer_ = std::make_unique<Renderer>(context_, resolved(), options_.seed);
         }
         restartTime_ = Clock::now();
         renderSeconds_ = 0.0;
@@ -405,7 +405,10 @@ private:
     gpu::Context& context_;
     Window& window_;
     Presenter& presenter_;
+    // The loaded scene with its pmfs resolved (session::resolve), and the one shown: the same with
+    // the orbit's camera. A camera is not a pmf, so resolved() runs no pilot.
     const Scene sceneAsLoaded_;
+    ResolvedScene resolved() const { return resolveScene(context_, *scene_, options_.seed).scene; }
     const ViewOptions options_;
     const bool quiet_;
     std::unique_ptr<Scene> scene_;
@@ -556,10 +559,9 @@ int runView(const session::CommonOptions& common, const ViewOptions& optionsIn) 
     VkSurfaceKHR surface = VK_NULL_HANDLE;
     std::unique_ptr<gpu::Context> context = presentingContext(window, contextOptions, surface);
     Presenter presenter(*context, surface, window.framebufferSize());  // owns the surface from here
-    for (const PmfPilotResult& pilot : resolveAutoPmfs(*context, scene, o.seed))
-        if (!common.quiet) fmt::print(stderr, "{}", pilot.summary());
     {
-        Viewer viewer(*context, window, presenter, std::move(scene), o, common.quiet);
+        Viewer viewer(*context, window, presenter, session::resolve(*context, std::move(scene), o.seed, common.quiet), o,
+                      common.quiet);
         viewer.run();
     }
     session::checkValidation(*context);
