@@ -461,9 +461,9 @@ TEST_F(Cli, PlanSaysWhetherVolumeCodeIsCompiled) {
     };
     std::string withMedia = plan(test::sourcePath("scenes/absorbing-slab.json"));
     EXPECT_NE(withMedia.find("debiased_ray_march"), std::string::npos) << withMedia;
-    EXPECT_NE(withMedia.find("media            on"), std::string::npos) << withMedia;
+    EXPECT_NE(withMedia.find("media               on"), std::string::npos) << withMedia;
     std::string without = plan(scene());
-    EXPECT_NE(without.find("media            off"), std::string::npos) << without;
+    EXPECT_NE(without.find("media               off"), std::string::npos) << without;
     EXPECT_NE(without.find("volume code folded out"), std::string::npos) << without;
 }
 
@@ -512,7 +512,7 @@ TEST_F(Cli, DerivativePlanAndMetadata) {
     const std::string text = readText(planFile);
     for (const char* line : {"parameter   primitives[1].transform.position[1] = 1", "h_0         0.0625",
                              "estimator   single_term", "geometric pmf, r = 0.5", "3.50 path_trace evaluations per sample",
-                             "russian roulette off"})
+                             "russian roulette    off"})
         EXPECT_NE(text.find(line), std::string::npos) << "missing '" << line << "' in:\n" << text;
     CommandResult r = run("render " + plane + " --derivative 'bsdfs[0].albedo' --spp 4 -q -o " + out("d.exr"));
     ASSERT_EQ(r.exitCode, 0) << r.stderrText;

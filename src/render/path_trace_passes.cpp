@@ -107,55 +107,6 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
                 : "level drawn per pixel sample in the shader");
     }
 
-    // ---- Feature switches folded into the pipeline ----
-    auto feature = [&](const char* name, bool on, const std::string& yes, const std::string& no) {
-        plan.features.push_back({name, on, on ? yes : no});
-    };
-    feature("spheres", f.spheres, "sphere primitives present", "no sphere primitives");
-    feature("disks", f.disks, "disk primitives present", "no disk primitives");
-    feature("specular", f.specular, "mirror, dielectric or conductor materials present",
-            "no mirror, dielectric or conductor materials");
-    // Glossy material families (shared/bsdf.h): each one the scene lacks is folded out.
-    for (const auto& [bit, name, yes, no] :
-         {std::tuple{shader::kFamilyRoughConductor, "rough_conductor", "rough_conductor materials present", "no rough_conductor materials"},
-          std::tuple{shader::kFamilyPlastic, "plastic", "plastic materials present", "no plastic materials"},
-          std::tuple{shader::kFamilyRoughPlastic, "rough_plastic", "rough_plastic materials present", "no rough_plastic materials"},
-          std::tuple{shader::kFamilyOrenNayar, "oren_nayar", "oren_nayar materials present", "no oren_nayar materials"},
-          std::tuple{shader::kFamilyRoughDielectric, "rough_dielectric", "rough_dielectric materials present",
-                     "no rough_dielectric materials"},
-          std::tuple{shader::kFamilyThinSheet, "thinsheet", "thinsheet materials present (shadow rays pass them)",
-                     "no thinsheet materials"},
-          std::tuple{shader::kFamilyMixed, "mixed", "mixed materials present", "no mixed materials"},
-          std::tuple{shader::kFamilyTransparency, "transparency", "transparency materials present (shadow rays pass them)",
-                     "no transparency materials"}})
-        feature(name, (f.bsdfFamilies & bit) != 0u, yes, no);
-    feature("textures", f.textures, "textured material parameters (uvs computed at their hits)",
-            "no textured materials");
-    feature("light sampling", in.enableLightSampling && f.lightCount > 0, "next-event estimation",
-            in.enableLightSampling ? "no lights" : "enable_light_sampling is false");
-    feature("environment", f.environment, "infinite_sphere emitter", "no environment emitter");
-    feature("environment map", f.environmentMap, "infinite_sphere with an image, importance-sampled",
-            "no environment image");
-    feature("sphere cap", f.capLight != 0xffffffffu, "infinite_sphere_cap emitter", "no infinite_sphere_cap emitter");
-    feature("russian roulette", in.russianRoulette, "paths end with probability 1 - max(throughput) from the second bounce",
-            "off: a derivative render's evaluations must take the same survival decisions");
-    feature("debias", in.debias.estimator != DebiasEstimator::None, "debias block in the integrator",
-            "no debias block: plain I(k)");
-    feature("media", f.media, "media or forward boundaries present", "no participating media");
-    feature("grid media", f.grids, "voxel grid media present", "no grid media");
-    feature("inhomogeneous media", f.inhomogeneous, "a medium's density varies: transmittance estimated",
-            f.media ? "every medium homogeneous: comb estimators are exact, their code folded out" : "no participating media");
-    feature("uniform scene", f.fitsUniforms, "BVH nodes and primitives read from uniform buffers (faster loads)",
-            "more than 2048 BVH nodes or 1024 primitives: read from uniform texel buffers (from storage buffers "
-            "on devices whose texel limit the scene exceeds)");
-    feature("uniform tables", f.tablesFitUniforms, "materials, lights and media read from uniform buffers (faster loads)",
-            fmt::format("more than {} materials, {} lights or {} media: read from storage buffers",
-                        shader::kMaxUniformMaterials, shader::kMaxUniformLights, shader::kMaxUniformMedia));
-    feature("brute-force rays", f.bruteForcePrims > 0u,
-            fmt::format("{} primitives tested in turn by every ray, no BVH walk", f.bruteForcePrims),
-            fmt::format("BVH traversal over {} primitives (brute force takes at most {}, in uniform buffers)",
-                        f.primCount, shader::kMaxBruteForcePrims));
-
     plan.featuresOf = "path_trace";
     // Scenes with glossy materials get the path tracer that has their code (path_trace_glossy.comp);
     // the others keep the smaller pipeline. (The pilots' entries run the render's path_trace too.)
@@ -209,16 +160,43 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         // the queued schedule's lanes take items from a queue rebuilt every unit: no budget.
         {kSpecLoopBudget, plan.levelSchedule == LevelSchedule::Queued ? 0u : kDefaultLoopBudget},
     };
-    if (plan.levelSchedule == LevelSchedule::Queued)
-        feature("loop budget", false, "",
-                "queued schedule: lanes are not carried across dispatches; a path ended by lavapipe's loop cap "
-                "is counted and reported");
-    else
-        feature("loop budget", true,
-                fmt::format("on lavapipe a lane stops after {} loop iterations per dispatch and carries its path "
-                            "to the next (its 65535-iteration loop cap ends loops silently)",
-                            kDefaultLoopBudget),
-                "");
+
+    // ---- What the pipeline is compiled with, read off its specialisation ----
+    const std::vector<gpu::SpecConstant>& spec = plan.pathTraceSpec;
+    plan.features = sceneFeatureSwitches(spec, f);
+    // Glossy material families (shared/bsdf.h): each one the scene lacks is folded out.
+    const uint32_t families = specValue(spec, kSpecBsdfFamilies);
+    for (const auto& [bit, name, detail] :
+         {std::tuple{shader::kFamilyRoughConductor, "rough_conductor", ""}, std::tuple{shader::kFamilyPlastic, "plastic", ""},
+          std::tuple{shader::kFamilyRoughPlastic, "rough_plastic", ""}, std::tuple{shader::kFamilyOrenNayar, "oren_nayar", ""},
+          std::tuple{shader::kFamilyRoughDielectric, "rough_dielectric", ""},
+          std::tuple{shader::kFamilyThinSheet, "thinsheet", " (shadow rays pass them)"},
+          std::tuple{shader::kFamilyMixed, "mixed", ""},
+          std::tuple{shader::kFamilyTransparency, "transparency", " (shadow rays pass them)"}}) {
+        const bool on = (families & bit) != 0u;
+        const std::string why = on ? fmt::format("{} materials present{}", name, detail) : fmt::format("no {} materials", name);
+        plan.features.push_back({name, on, fmt::format("{} (kBsdfFamilies bit {:#x})", why, bit)});
+    }
+    plan.features.insert(
+        plan.features.end(),
+        {specSwitch(spec, "light sampling", kSpecLightSampling, in.enableLightSampling ? "no lights" : "enable_light_sampling is false"),
+          specSwitch(spec, "environment", kSpecEnvironmentLight, "no environment emitter", 0xffffffffu),
+          specSwitch(spec, "environment map", kSpecEnvironmentMap, "no environment image"),
+          specSwitch(spec, "sphere cap", kSpecCapLight, "no infinite_sphere_cap emitter", 0xffffffffu),
+          specSwitch(spec, "russian roulette", kSpecRoulette, "off: a derivative render's evaluations must take the same survival decisions",
+                     0, "paths end with probability 1 - max(throughput) from the second bounce"),
+          specSwitch(spec, "debias", kSpecDebiasMode, "no debias block: plain I(k)"),
+          specSwitch(spec, "media", kSpecHasMedia, "no participating media"),
+          specSwitch(spec, "grid media", kSpecHasGrids, "no grid media"),
+          specSwitch(spec, "inhomogeneous media", kSpecHasInhomogeneousMedia,
+                     f.media ? "every medium homogeneous: comb estimators are exact, their code folded out" : "no participating media"),
+          specSwitch(spec, "loop budget", kSpecLoopBudget,
+                     "queued schedule: lanes are not carried across dispatches; a path ended by lavapipe's loop cap "
+                     "is counted and reported",
+                     0,
+                     "loop iterations per lane and dispatch: on lavapipe a lane stops there and carries its path to "
+                     "the next dispatch (its 65535-iteration loop cap ends loops silently); other devices run "
+                     "without a budget")});
 }
 
 uint32_t deviceLoopBudget(const gpu::Context& context) {

@@ -127,34 +127,6 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
                   "finishes the running block; unbiased up to the truncation");
     }
 
-    // ---- Feature switches ----
-    auto feature = [&](const char* name, bool on, std::string yes, std::string no) {
-        plan.features.push_back({name, on, on ? yes : no});
-    };
-    feature("spheres", f.spheres, "sphere primitives present", "no sphere primitives");
-    feature("disks", f.disks, "disk primitives present", "no disk primitives");
-    feature("specular", f.specular, "mirror, dielectric or conductor materials present",
-            "no mirror, dielectric or conductor materials");
-    feature("glossy", f.bsdfFamilies != 0u,
-            "glossy, plastic or mixed materials present: photons sample them, gathers weight each photon by the BSDF",
-            "Lambert and delta materials only");
-    feature("textures", f.textures, "textured material parameters (uvs computed at their hits)", "no textures");
-    feature("lights at infinity", f.environment || f.capLight != 0xffffffffu,
-            "infinite_sphere or infinite_sphere_cap: photons enter through the disk of the scene's bounding sphere",
-            "no infinite_sphere or infinite_sphere_cap");
-    feature("next event", nee, "direct_lighting = next_event", "direct_lighting = photons: all light from photons");
-    feature("debias", unbiased(in), "debias block: blocks of passes, K_r_b + correction", "no debias block: biased K_r");
-    feature("uniform scene", f.fitsUniforms,
-            "photon_trace reads BVH nodes and primitives from uniform buffers, the gather from uniform texel buffers",
-            "more than 2048 BVH nodes or 1024 primitives: both read them from uniform texel buffers (from storage "
-            "buffers on devices whose texel limit the scene exceeds)");
-    feature("uniform tables", f.tablesFitUniforms, "materials and lights read from uniform buffers (faster loads)",
-            fmt::format("more than {} materials or {} lights: read from storage buffers", shader::kMaxUniformMaterials,
-                        shader::kMaxUniformLights));
-    feature("brute-force rays", f.bruteForcePrims > 0u,
-            fmt::format("photon_trace tests the {} primitives in turn, no BVH walk", f.bruteForcePrims),
-            fmt::format("BVH traversal over {} primitives (brute force takes at most {}, in uniform buffers)",
-                        f.primCount, kMaxBruteForcePrims));
     plan.featuresOf = "photon_trace and gather";
     plan.photonSceneCentre = f.sceneCentre;
     plan.photonSceneRadius = 0.5f * f.sceneExtent;  // the same disk as the light selection's power (gpu_scene.cpp)
@@ -186,6 +158,24 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         {kSpecCapLight, f.capLight},
         {kSpecEnvironmentMap, f.environmentMap},
     };
+
+    // ---- What the pipelines are compiled with, read off their specialisation ----
+    const std::vector<gpu::SpecConstant>& spec = plan.photonSpec;
+    plan.features = sceneFeatureSwitches(spec, f);
+    const bool atInfinity = specValue(spec, kSpecEnvironmentLight) != 0xffffffffu || specValue(spec, kSpecCapLight) != 0xffffffffu;
+    plan.features.insert(
+        plan.features.end(),
+        {specSwitch(spec, "glossy", kSpecBsdfFamilies, "Lambert and delta materials only", 0,
+                    "glossy, plastic or mixed materials present: photons sample them, gathers weight each photon by "
+                    "the BSDF"),
+         FeatureSwitch{"lights at infinity", atInfinity,
+                       atInfinity ? "infinite_sphere or infinite_sphere_cap: photons enter through the disk of the scene's "
+                                    "bounding sphere (kEnvironmentLight, kCapLight)"
+                                  : "no infinite_sphere or infinite_sphere_cap (kEnvironmentLight, kCapLight = 0xffffffff)"},
+         specSwitch(spec, "environment map", kSpecEnvironmentMap, "no environment image"),
+         specSwitch(spec, "next event", kSpecPhotonNextEvent, "direct_lighting = photons: all light from photons"),
+         specSwitch(spec, "debias", kSpecPhotonEstimator, "no debias block: biased K_r", kPhotonBiased,
+                    "debias block: blocks of passes, K_r_b + correction")});
 }
 
 // ---- Passes ----

@@ -38,22 +38,69 @@ const PlannedPass& plannedEntry(const RenderPlan& plan, PassKind kind) {
     throw std::logic_error(fmt::format("the plan has no {} pass", passName(kind)));
 }
 
+namespace {
+
+const shader::SpecConstantInfo& specRow(uint32_t id) {
+    const shader::SpecConstantInfo* row = shader::specConstantInfo(id);
+    if (!row) throw std::logic_error(fmt::format("specialisation constant {} is not in shared/spec_constants.h", id));
+    return *row;
+}
+
+std::string specValueText(const shader::SpecConstantInfo& row, uint32_t value) {
+    const std::string type = row.type;
+    if (type == "bool") return value ? "true" : "false";
+    if (type == "float") return fmt::format("{:g}", gpu::floatOfSpec(value));
+    if (value == 0xffffffffu) return "0xffffffff";
+    return fmt::format("{}", value);
+}
+
+}  // namespace
+
 std::string describeSpecialisation(const std::vector<gpu::SpecConstant>& spec) {
     std::vector<gpu::SpecConstant> sorted = spec;
     std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
     std::string s;
     for (const gpu::SpecConstant& c : sorted) {
-        const shader::SpecConstantInfo* row = shader::specConstantInfo(c.id);
-        if (!row) throw std::logic_error(fmt::format("specialisation constant {} is not in shared/spec_constants.h", c.id));
-        const std::string type = row->type;
-        std::string value;
-        if (type == "bool") value = c.value ? "true" : "false";
-        else if (type == "float") value = fmt::format("{:g}", gpu::floatOfSpec(c.value));
-        else if (c.value == 0xffffffffu) value = "0xffffffff";
-        else value = fmt::format("{}", c.value);
-        s += fmt::format("  {:<2} {:<19} {:<10} {}\n", c.id, row->name, value, row->why);
+        const shader::SpecConstantInfo& row = specRow(c.id);
+        s += fmt::format("  {:<2} {:<19} {:<10} {}\n", c.id, row.name, specValueText(row, c.value), row.why);
     }
     return s;
+}
+
+uint32_t specValue(const std::vector<gpu::SpecConstant>& spec, uint32_t id) {
+    for (const gpu::SpecConstant& c : spec)
+        if (c.id == id) return c.value;
+    throw std::logic_error(fmt::format("the pipeline does not set {}", specRow(id).name));
+}
+
+FeatureSwitch specSwitch(const std::vector<gpu::SpecConstant>& spec, const char* name, uint32_t id,
+                         const std::string& offWhy, uint32_t offValue, const std::string& onWhy) {
+    const shader::SpecConstantInfo& row = specRow(id);
+    const uint32_t value = specValue(spec, id);
+    const bool on = value != offValue;
+    const std::string why = !on ? offWhy : onWhy.empty() ? std::string(row.why) : onWhy;
+    return {name, on, fmt::format("{} ({} = {})", why, row.name, specValueText(row, value))};
+}
+
+std::vector<FeatureSwitch> sceneFeatureSwitches(const std::vector<gpu::SpecConstant>& spec, const SceneFeatures& f) {
+    using namespace shader;
+    return {
+        specSwitch(spec, "spheres", kSpecHasSpheres, "no sphere primitives"),
+        specSwitch(spec, "disks", kSpecHasDisks, "no disk primitives"),
+        specSwitch(spec, "specular", kSpecHasSpecular, "no mirror, dielectric or conductor materials"),
+        specSwitch(spec, "textures", kSpecHasTextures, "no textured materials"),
+        specSwitch(spec, "smooth normals", kSpecSmoothNormals, "every triangle flat-shaded"),
+        specSwitch(spec, "uniform scene", kSpecSceneInUniforms,
+                   "more than 2048 BVH nodes or 1024 primitives: read from uniform texel buffers (from storage "
+                   "buffers on devices whose texel limit the scene exceeds)"),
+        specSwitch(spec, "uniform tables", kSpecTablesInUniforms,
+                   fmt::format("more than {} materials, {} lights or {} media: read from storage buffers",
+                               kMaxUniformMaterials, kMaxUniformLights, kMaxUniformMedia)),
+        specSwitch(spec, "brute-force rays", kSpecBruteForcePrims,
+                   fmt::format("BVH traversal over {} primitives (brute force takes at most {}, in uniform buffers)",
+                               f.primCount, kMaxBruteForcePrims),
+                   0, "every ray tests the scene's primitives in turn, no BVH walk"),
+    };
 }
 
 RenderPlan makeRenderPlan(const Scene& scene, const SceneFeatures& f, const PlanOptions& options) {
@@ -100,7 +147,7 @@ std::string describePlan(const Scene& scene, const RenderPlan& plan) {
     for (const auto& p : plan.skipped) s += fmt::format("  {:<16} {}\n", p.name, p.why);
     s += fmt::format("compiled into the {} pipeline{}:\n", plan.featuresOf,
                      plan.featuresOf.find(' ') == std::string::npos ? "" : "s");
-    for (const auto& f : plan.features) s += fmt::format("  {:<16} {:<4} {}\n", f.name, f.on ? "on" : "off", f.why);
+    for (const auto& f : plan.features) s += fmt::format("  {:<19} {:<4} {}\n", f.name, f.on ? "on" : "off", f.why);
     // The values themselves, named by the table of shader features (shared/spec_constants.h).
     if (!plan.pathTraceSpec.empty())
         s += fmt::format("specialisation of {} (the scene's values; a device may change the loop budget and the "

@@ -70,10 +70,12 @@ struct SkippedPass {
     std::string why;
 };
 
+// One line of `plan`'s summary of what a pipeline is compiled with: read off the pipeline's
+// specialisation (specSwitch), so the summary cannot disagree with the pipeline.
 struct FeatureSwitch {
     std::string name;
     bool on = false;
-    std::string why;
+    std::string why;  // ends with the constant and its value as the table names them
 };
 
 // The pmf pilot's renders (render/pmf_pilot.h) take every sample at one fixed level and record the
@@ -121,6 +123,17 @@ std::string pmfDescription(const PmfSettings& pmf);
 // shader features (shared/spec_constants.h), in id order; throws std::logic_error for an id the
 // table lacks.
 std::string describeSpecialisation(const std::vector<gpu::SpecConstant>& spec);
+// The feature switch `name` of a pipeline specialised with `spec`: on when the constant `id` is
+// not `offValue`, explained by `onWhy` (default: the table's why) when on and by `offWhy` when off,
+// then by the table's name of the constant and its value. std::logic_error when `spec` does not set
+// `id`.
+FeatureSwitch specSwitch(const std::vector<gpu::SpecConstant>& spec, const char* name, uint32_t id,
+                         const std::string& offWhy, uint32_t offValue = 0, const std::string& onWhy = "");
+// The value of constant `id` in `spec` (std::logic_error when it is not set).
+uint32_t specValue(const std::vector<gpu::SpecConstant>& spec, uint32_t id);
+// The switches of the scene that every integrator's pipelines compile on: primitive kinds, delta
+// materials, textures, where the scene is read from, brute-force rays.
+std::vector<FeatureSwitch> sceneFeatureSwitches(const std::vector<gpu::SpecConstant>& spec, const SceneFeatures& f);
 
 // The reconstruction filter as the camera passes see it (kFilter*).
 uint32_t filterConstant(const Camera& camera);

@@ -204,7 +204,10 @@ void writeImages(const ImageOutputOptions& o, const Film& film, const OutputInfo
     for (const auto& e : info.extra) meta.entries.push_back(e);
     if (!info.shards.empty()) {
         std::string seeds;
-        for (uint32_t seed : info.seeds) seeds += (seeds.empty() ? "" : ",") + std::to_string(seed);
+        for (uint32_t seed : info.seeds) {
+            if (!seeds.empty()) seeds += ',';
+            seeds += std::to_string(seed);
+        }
         meta.entries.push_back({"telescope:seeds", seeds});
         meta.entries.push_back({"telescope:shards", info.shards});
     }
