@@ -129,12 +129,17 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer RecordRef {
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer LoopStatsRef { uint u[]; };
 
 LoopStatsRef loopStats() { return LoopStatsRef(uvec2(pc.statsAddressLo, pc.statsAddressHi)); }
+// The lane's record flags (kRecord*: 0 = no record) and its record (shared/gpu_types.h
+// continuationFlagBytes: the flags first, zeroed; the records after them, never read unflagged).
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer RecordFlagsRef { uint f[]; };
+uint64_t continuationBase() { return packUint2x32(uvec2(pc.stateAddressLo, pc.stateAddressHi)); }
+RecordFlagsRef recordFlags() { return RecordFlagsRef(continuationBase()); }
 RecordRef recordOf(uint lane) {
-    uint64_t base = packUint2x32(uvec2(pc.stateAddressLo, pc.stateAddressHi));
-    return RecordRef(base + uint64_t(lane) * uint64_t(kContinuationVec4s * 16u));
+    return RecordRef(continuationBase() + uint64_t(continuationFlagBytes(pc.width * pc.height)) +
+                     uint64_t(lane) * uint64_t(kContinuationVec4s * 16u));
 }
 
-// Record flags (v[7].w): pending; heavy (a step that cannot finish beside other lanes: it runs
+// Record flags (recordFlags): pending; heavy (a step that cannot finish beside other lanes: it runs
 // alone in a dispatch that finishes carried paths); safe (the dispatch that ran it reached
 // lavapipe's cap or a walk's hard limit: it runs with kSafeLoopBudget).
 const uint kRecordPending = 1u, kRecordHeavy = 2u, kRecordSafe = 4u;
@@ -151,17 +156,18 @@ void saveRecord(uint lane, PathState p, Rng rng, uint g, float rays, uint flags)
     r.v[4] = uvec4(floatBitsToUint(p.result.correction), (p.specularPrev ? 1u : 0u) | (p.fromSurface ? 2u : 0u));
     r.v[5] = uvec4(floatBitsToUint(p.lastVertex), p.medium);
     r.v[6] = uvec4(p.mediumScatters, rng.state, rng.inc, g);
-    r.v[7] = uvec4(floatBitsToUint(gFilterWeight), floatBitsToUint(rays), 0u, kRecordPending | flags);
+    r.v[7] = uvec4(floatBitsToUint(gFilterWeight), floatBitsToUint(rays), 0u, 0u);
+    recordFlags().f[lane] = kRecordPending | flags;
     atomicAdd(loopStats().u[kLoopStatCarried], 1u);
 }
 
 // Takes the lane's pending record, if any: false (and nothing changed) when there is none.
 // (inout, not out: GLSL copies out parameters back even when the function did not set them.)
 bool takeRecord(uint lane, inout PathState p, inout Rng rng, inout uint g, inout float rays) {
+    if ((recordFlags().f[lane] & kRecordPending) == 0u) return false;
+    recordFlags().f[lane] = 0u;
     RecordRef r = recordOf(lane);
     uvec4 v7 = r.v[7];
-    if ((v7.w & kRecordPending) == 0u) return false;
-    r.v[7] = uvec4(0u);
     gFilterWeight = uintBitsToFloat(v7.x);
     rays = uintBitsToFloat(v7.y);
     uvec4 v0 = r.v[0], v1 = r.v[1], v2 = r.v[2], v3 = r.v[3], v4 = r.v[4], v5 = r.v[5], v6 = r.v[6];
@@ -198,7 +204,7 @@ bool startLane(uvec2 pixel, uint pixelIndex, LevelPmf pmf, uint end, inout uint 
     safe = false;
     bool resumed = false;
     if (kLoopBudget != 0u) {
-        uint state = recordOf(pixelIndex).v[7].w;
+        uint state = recordFlags().f[pixelIndex];
         bool heavy = (state & kRecordHeavy) != 0u;
         if (heavy) {
             // Heavy records run only in dispatches that finish carried paths (no new samples: the

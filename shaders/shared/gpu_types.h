@@ -181,6 +181,11 @@ CONST uint kLoopStatRetried = 4u;   // lane dispatches undone and retried (the c
 CONST uint kLoopStatCount = 5u;
 // A continuation record: kContinuationVec4s vec4 per lane (path_trace_main.glsl saveRecord).
 CONST uint kContinuationVec4s = 8u;
+// The continuation buffer: each lane's record flags first (one uint per lane, kRecord*; zeroed
+// before the first dispatch), padded to 16 bytes, then the records, each written before it is read.
+// The records are never zeroed: only lanes that carry a path touch their pages (zeroing the 8 MiB
+// of a 256x256 render cost 16 ms of a 0.32 s render on lavapipe: docs/BENCHMARKS.md).
+FN uint continuationFlagBytes(uint lanes) { return (lanes * 4u + 15u) & ~15u; }
 
 // The largest scene traced primitive by primitive (kSpecBruteForcePrims; break-even ~24:
 // docs/BENCHMARKS.md).

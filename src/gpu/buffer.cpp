@@ -162,9 +162,11 @@ void Buffer::download(void* data, VkDeviceSize bytes, VkDeviceSize offset) const
     else copyViaStaging(data, bytes, offset, false);
 }
 
-void Buffer::fill(uint32_t value) {
+void Buffer::fill(uint32_t value) { fill(value, 0, VK_WHOLE_SIZE); }
+
+void Buffer::fill(uint32_t value, VkDeviceSize offset, VkDeviceSize bytes) {
     OneTimeCommands once(*context_);
-    vkCmdFillBuffer(once.cmd(), buffer_, 0, VK_WHOLE_SIZE, value);
+    vkCmdFillBuffer(once.cmd(), buffer_, offset, bytes, value);
     once.submit();
 }
 

@@ -43,6 +43,7 @@ public:
     void upload(const void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
     void download(void* data, VkDeviceSize bytes, VkDeviceSize offset = 0) const;
     void fill(uint32_t value);  // whole buffer
+    void fill(uint32_t value, VkDeviceSize offset, VkDeviceSize bytes);  // bytes: a multiple of 4
 
     template <class T>
     void upload(const std::vector<T>& v) { if (!v.empty()) upload(v.data(), v.size() * sizeof(T)); }

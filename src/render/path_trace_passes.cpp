@@ -181,7 +181,8 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         plan.features.end(),
         {specSwitch(spec, "light sampling", kSpecLightSampling, in.enableLightSampling ? "no lights" : "enable_light_sampling is false"),
           specSwitch(spec, "environment", kSpecEnvironmentLight, "no environment emitter", 0xffffffffu),
-          specSwitch(spec, "environment map", kSpecEnvironmentMap, "no environment image"),
+          specSwitch(spec, "environment map", kSpecEnvironmentMap, "no environment image", 0,
+                     "infinite_sphere with an image, importance-sampled"),
           specSwitch(spec, "sphere cap", kSpecCapLight, "no infinite_sphere_cap emitter", 0xffffffffu),
           specSwitch(spec, "russian roulette", kSpecRoulette, "off: a derivative render's evaluations must take the same survival decisions",
                      0, "paths end with probability 1 - max(throughput) from the second bounce"),
@@ -239,8 +240,11 @@ public:
         push_.statsAddressLo = uint32_t(loopStats_.address());
         push_.statsAddressHi = uint32_t(loopStats_.address() >> 32);
         if (loopBudget_ != 0) {
-            records_ = gpu::Buffer(context, pixels_ * shader::kContinuationVec4s * sizeof(glm::vec4), "continuation records");
-            records_.fill(0);
+            // The lanes' flags first, zeroed; the records after them, not (shared/gpu_types.h).
+            const VkDeviceSize flagBytes = shader::continuationFlagBytes(uint32_t(pixels_));
+            records_ = gpu::Buffer(context, flagBytes + pixels_ * shader::kContinuationVec4s * sizeof(glm::vec4),
+                                   "continuation records");
+            records_.fill(0, 0, flagBytes);
             push_.stateAddressLo = uint32_t(records_.address());
             push_.stateAddressHi = uint32_t(records_.address() >> 32);
             drain_ = std::make_unique<gpu::CommandBatch>(context, 1);

@@ -172,7 +172,8 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
                        atInfinity ? "infinite_sphere or infinite_sphere_cap: photons enter through the disk of the scene's "
                                     "bounding sphere (kEnvironmentLight, kCapLight)"
                                   : "no infinite_sphere or infinite_sphere_cap (kEnvironmentLight, kCapLight = 0xffffffff)"},
-         specSwitch(spec, "environment map", kSpecEnvironmentMap, "no environment image"),
+         specSwitch(spec, "environment map", kSpecEnvironmentMap, "no environment image", 0,
+                     "infinite_sphere with an image, importance-sampled"),
          specSwitch(spec, "next event", kSpecPhotonNextEvent, "direct_lighting = photons: all light from photons"),
          specSwitch(spec, "debias", kSpecPhotonEstimator, "no debias block: biased K_r", kPhotonBiased,
                     "debias block: blocks of passes, K_r_b + correction")});
