@@ -35,7 +35,8 @@ std::string seedList(const std::vector<uint32_t>& seeds) {
     std::string s;
     for (size_t i = 0; i < seeds.size(); ++i) {
         if (i == 8 && seeds.size() > 10) return s + fmt::format(", ... ({} seeds)", seeds.size());
-        s += (i ? "," : "") + std::to_string(seeds[i]);
+        if (i) s += ',';
+        s += std::to_string(seeds[i]);
     }
     return s;
 }

@@ -47,6 +47,19 @@ public:
 
     template <class T>
     void upload(const std::vector<T>& v) { if (!v.empty()) upload(v.data(), v.size() * sizeof(T)); }
+    // Calls read(contents) with the whole buffer's contents: the mapping itself where reads through
+    // it are fast (lavapipe, integrated GPUs: no copy, no second 2x-sized touch of fresh memory),
+    // else a downloaded copy. `contents` is valid during the call only.
+    template <class F>
+    void readContents(F&& read) const {
+        if (mapped_ && mappedCached_) {
+            read(static_cast<const void*>(mapped_));
+            return;
+        }
+        std::vector<char> copy(size_);
+        download(copy.data(), size_);
+        read(static_cast<const void*>(copy.data()));
+    }
     template <class T>
     std::vector<T> downloadAll() const {
         std::vector<T> v(size_ / sizeof(T));

@@ -240,15 +240,16 @@ Film Renderer::film() const {
     const DebiasSettings& d = integrator_.debias;
     film.setPerPixelCounts(usesPhotons(integrator_) && d.estimator != DebiasEstimator::None &&
                            d.schedule == LevelSchedule::PerPixel);
-    std::vector<glm::vec4> raw(film.pixelCount() * shader::kChannelCount * 2);
-    accum_.download(raw.data(), raw.size() * sizeof(glm::vec4));
-    for (uint32_t c = 0; c < shader::kChannelCount; ++c) {
-        auto& sums = film.sums(c);
-        for (size_t i = 0; i < film.pixelCount(); ++i) {
-            size_t k = (c * film.pixelCount() + i) * 2;
-            sums[i] = glm::dvec4(raw[k]) + glm::dvec4(raw[k + 1]);
+    accum_.readContents([&](const void* contents) {
+        const glm::vec4* raw = static_cast<const glm::vec4*>(contents);
+        for (uint32_t c = 0; c < shader::kChannelCount; ++c) {
+            auto& sums = film.sums(c);
+            for (size_t i = 0; i < film.pixelCount(); ++i) {
+                size_t k = (c * film.pixelCount() + i) * 2;
+                sums[i] = glm::dvec4(raw[k]) + glm::dvec4(raw[k + 1]);
+            }
         }
-    }
+    });
     film.setPending(passes_->pending());
     return film;
 }
