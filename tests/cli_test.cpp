@@ -315,24 +315,43 @@ TEST_F(Cli, ReferenceResumesFromItsCheckpoint) {
 }
 
 // A reference of a scene whose pmf is "auto": the session runs the pilot (the Renderer cannot be
-// built without), the outputs record the pmf it chose, and the next run, which would resume the
-// checkpoint with another pilot's pmf, is refused naming the key.
-TEST_F(Cli, ReferenceResolvesAnAutoPmfAndRefusesToResumeIt) {
-    const std::string args = "reference " + test::sourcePath("scenes/furnace.json") +
-                             " --set camera.resolution=[8,8] --set integrator.max_bounces=2 --spp 2 -q --no-png"
-                             " --set 'integrator.debias={\"estimator\":\"sum\",\"pmf\":{\"type\":\"auto\",\"pilot_spp\":1,"
-                             "\"pilot_levels\":3}}' -o " + out("ref.exr");
-    CommandResult r = run(args);
+// built without), and the outputs record the pmf it chose. The next run resumes the checkpoint
+// (2 spp, then 4 more) with that pmf, running no second pilot (whose choice could differ: two estimators in one
+// film); a render --resume of it likewise. Control of the "no pilot" check: the first run, not
+// quiet, does print the pilot's summary.
+TEST_F(Cli, AnAutoPmfIsResolvedOnceAndResumedWithThePilotsChoice) {
+    const std::string scene = test::sourcePath("scenes/furnace.json") +
+                              " --set camera.resolution=[8,8] --set integrator.max_bounces=2 --no-png"
+                              " --set 'integrator.debias={\"estimator\":\"sum\",\"pmf\":{\"type\":\"auto\","
+                              "\"pilot_spp\":1,\"pilot_levels\":3}}'";
+    auto settingsOf = [](const std::string& exr) {
+        auto in = OIIO::ImageInput::open(exr);
+        EXPECT_TRUE(in) << exr;
+        return in ? nlohmann::json::parse(in->spec().get_string_attribute("telescope:settings")) : nlohmann::json();
+    };
+    auto sppOf = [](const std::string& exr) {
+        auto in = OIIO::ImageInput::open(exr);
+        return in ? std::string(in->spec().get_string_attribute("telescope:spp")) : std::string();
+    };
+    CommandResult r = run("reference " + scene + " --spp 2 -o " + out("ref.exr"));
     ASSERT_EQ(r.exitCode, 0) << r.stderrText;
-    auto in = OIIO::ImageInput::open(out("ref.exr"));
-    ASSERT_TRUE(in);
-    const nlohmann::json pmf =
-        nlohmann::json::parse(in->spec().get_string_attribute("telescope:settings"))["integrator"]["debias"]["pmf"];
+    EXPECT_NE(r.stderrText.find("path-depth pmf pilot"), std::string::npos) << r.stderrText;
+    const nlohmann::json first = settingsOf(out("ref.exr"));
+    const nlohmann::json& pmf = first["integrator"]["debias"]["pmf"];
     EXPECT_NE(pmf["type"], "auto") << pmf.dump();
     EXPECT_NE(pmf["origin"].get<std::string>().find("auto pilot"), std::string::npos) << pmf.dump();
-    r = run(args);
-    EXPECT_EQ(r.exitCode, 2) << r.stderrText;
-    EXPECT_NE(r.stderrText.find("integrator.debias.pmf.type"), std::string::npos) << r.stderrText;
+
+    r = run("reference " + scene + " --spp 4 -o " + out("ref.exr"));
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    EXPECT_EQ(r.stderrText.find("pmf pilot"), std::string::npos) << "a second pilot ran:\n" << r.stderrText;
+    EXPECT_EQ(settingsOf(out("ref.exr")), first);
+    EXPECT_EQ(sppOf(out("ref.exr")), "6");  // --spp adds to the checkpoint's 2
+
+    r = run("render " + scene + " --spp 2 --resume " + out("ref.exr.checkpoint") + " -o " + out("more.exr"));
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    EXPECT_EQ(r.stderrText.find("pmf pilot"), std::string::npos) << "a second pilot ran:\n" << r.stderrText;
+    EXPECT_EQ(settingsOf(out("more.exr")), first);
+    EXPECT_EQ(sppOf(out("more.exr")), "8");
 }
 
 TEST_F(Cli, ConvergeShowsTheBiasOfTruncationAndNotOfTheDebiasedEstimator) {

@@ -280,12 +280,10 @@ int runRender(const CommonOptions& common, const RenderOptions& optionsIn) {
     if (!o.statsPath.empty()) checkOutputPath(o.statsPath, "--stats-json", ".json");
     std::optional<Checkpoint> resume;
     if (!o.resumePath.empty()) {
-        if (const char* key = autoPmfKey(loaded.integrator); *key)
-            throw InputError(loaded.path, key,
-                             "a render with pmf \"auto\" cannot be resumed: put the pmf its pilot chose in the scene");
         resume = loadCheckpoint(o.resumePath);
         if (!o.seedGiven) o.seed = resume->seed;
         checkResumable(*resume, o.resumePath, loaded, o.seed);
+        takeRecordedPmfs(loaded, *resume, o.resumePath);  // pmf "auto": the checkpoint's pilot's
     }
     reportIgnoredKeys(loaded, common.quiet);
 
@@ -365,12 +363,9 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
     checkImageOutputs(o.output);
     std::optional<Checkpoint> resume;
     if (fs::exists(o.output.checkpointPath)) {
-        if (const char* key = autoPmfKey(scene.integrator); *key)
-            throw InputError(scene.path, key,
-                             "a reference with pmf \"auto\" cannot be resumed from its checkpoint (another pilot may "
-                             "choose another pmf): put the pmf its pilot chose in the scene");
         resume = loadCheckpoint(o.output.checkpointPath);
         checkResumable(*resume, o.output.checkpointPath, scene, o.seed);
+        takeRecordedPmfs(scene, *resume, o.output.checkpointPath);  // pmf "auto": the checkpoint's pilot's
     }
     reportIgnoredKeys(scene, common.quiet);
     if (!common.quiet) {

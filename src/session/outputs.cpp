@@ -46,6 +46,22 @@ Scene loadWithOverrides(const CommonOptions& o, const std::vector<SceneOverride>
     return loadScene(o.scenePath, overrides);
 }
 
+void takeRecordedPmfs(Scene& scene, const Checkpoint& c, const std::string& path) {
+    const char* key = autoPmfKey(scene.integrator);
+    if (!*key) return;
+    if (c.settings.empty())
+        throw InputError(path, key, "the checkpoint records no settings, so not the pmf its pilot chose: put a pmf in "
+                                    "the scene, or render again");
+    const Scene recorded = reproduceScene(c.scene, scene.path, c.settings);
+    IntegratorSettings& in = scene.integrator;
+    if (in.debias.estimator != DebiasEstimator::None && in.debias.pmf.type == PmfType::Auto)
+        in.debias.pmf = recorded.integrator.debias.pmf;
+    if (in.transmittance.type == TransmittanceEstimatorType::DebiasedRayMarch && in.transmittance.pmf.type == PmfType::Auto)
+        in.transmittance.pmf = recorded.integrator.transmittance.pmf;
+    if (const char* left = autoPmfKey(in); *left)
+        throw InputError(path, left, "the checkpoint records this pmf as \"auto\" too: it has no pilot's choice to resume with");
+}
+
 ResolvedScene resolve(gpu::Context& context, Scene scene, uint32_t seed, bool quiet) {
     Resolution r = resolveScene(context, std::move(scene), seed);
     if (!quiet)

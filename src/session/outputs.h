@@ -31,6 +31,12 @@ std::string pendingBlockText(uint64_t block, uint32_t level, uint32_t done, uint
 // The scene file with the --set overrides applied, then `more` (a converge method's; throws
 // InputError naming the file and key).
 Scene loadWithOverrides(const CommonOptions& o, const std::vector<SceneOverride>& more = {});
+// Resuming checkpoint `c` (at `path`) of a scene with a pmf "auto": each such pmf becomes the one
+// the checkpoint's own pilot chose (its recorded settings, read by the scene file's reader), so the
+// resumed samples draw their levels as the first ones did and no pilot runs again. A scene without
+// "auto" is left as it is. InputError naming the key when the checkpoint records no settings
+// (version 1) or recorded "auto" itself.
+void takeRecordedPmfs(Scene& scene, const Checkpoint& c, const std::string& path);
 // The scene with every pmf "auto" resolved by its pilot (render/pmf_pilot.h; seeded from the
 // render's seed), each pilot's summary printed to stderr unless quiet: what render, reference,
 // plan and view build their renderers from.
