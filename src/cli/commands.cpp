@@ -342,9 +342,9 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
     ReferenceOptions o = optionsIn;
     InterruptGuard interrupts;
     if (o.output.checkpointPath.empty()) o.output.checkpointPath = o.output.exrPath + ".checkpoint";
-    Scene scene = loadWithOverrides(common);
-    const UnbiasedSetup setup = unbiasedSetup(scene);
-    scene.integrator = setup.integrator;
+    Scene loaded = loadWithOverrides(common);
+    const UnbiasedSetup setup = unbiasedSetup(loaded);
+    loaded.integrator = setup.integrator;
     if (!o.derivative.key.empty()) {
         // Each evaluation unbiased (as above), the derivative by the chosen estimator, resumable
         // through the same checkpoint: a derivative render that checkpoints every interval.
@@ -358,16 +358,16 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
         r.checkpointEvery = o.checkpointInterval;
         if (fs::exists(o.output.checkpointPath)) r.resumePath = o.output.checkpointPath;
         if (!common.quiet) fmt::print(stderr, "reference: {}\n", setup.why);
-        return runDerivativeRender(common, r, scene);
+        return runDerivativeRender(common, r, loaded);
     }
     checkImageOutputs(o.output);
     std::optional<Checkpoint> resume;
     if (fs::exists(o.output.checkpointPath)) {
         resume = loadCheckpoint(o.output.checkpointPath);
-        checkResumable(*resume, o.output.checkpointPath, scene, o.seed);
-        takeRecordedPmfs(scene, *resume, o.output.checkpointPath);  // pmf "auto": the checkpoint's pilot's
+        checkResumable(*resume, o.output.checkpointPath, loaded, o.seed);
+        takeRecordedPmfs(loaded, *resume, o.output.checkpointPath);  // pmf "auto": the checkpoint's pilot's
     }
-    reportIgnoredKeys(scene, common.quiet);
+    reportIgnoredKeys(loaded, common.quiet);
     if (!common.quiet) {
         fmt::print(stderr, "reference: {}\n", setup.why);
         if (resume)
@@ -377,8 +377,8 @@ int runReference(const CommonOptions& common, const ReferenceOptions& optionsIn)
 
     keepCheckpointsOnFailure({o.output.checkpointPath});
     gpu::Context context(contextOptions(common));
-    const ResolvedScene resolved = resolve(context, std::move(scene), o.seed, common.quiet);
-    scene = resolved.scene();  // what the outputs record: every pmf as run
+    const ResolvedScene resolved = resolve(context, std::move(loaded), o.seed, common.quiet);
+    const Scene& scene = resolved.scene();  // every pmf as run: what the outputs record
     Renderer renderer(context, resolved, o.seed);
     if (resume) {
         resumeFrom(renderer, *resume, o.output.checkpointPath, scene);

@@ -67,15 +67,14 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     }
 
     // ---- Estimator ----
-    if (in.debias.estimator != DebiasEstimator::None && in.debias.pmf.type == PmfType::Auto)
+    if (debiasPmfIsAuto(in))
         plan.passes.insert(plan.passes.begin(),
                            {PassKind::PathTrace, "pmf_pilot", "path_trace",
                             fmt::format("pmf 'auto': before the render, {} spp at each of {} fixed levels measure the "
                                         "second moment and cost of the correction",
                                         in.debias.pmf.pilotSpp, in.debias.pmf.pilotLevels),
                             true});
-    if (f.media && in.transmittance.type == TransmittanceEstimatorType::DebiasedRayMarch &&
-        in.transmittance.pmf.type == PmfType::Auto)
+    if (f.media && transmittancePmfIsAuto(in))
         plan.passes.insert(plan.passes.begin(),
                            {PassKind::PathTrace, "transmittance_pilot", "path_trace",
                             fmt::format("transmittance pmf 'auto': before the render, {} spp at each of {} fixed marching "

@@ -408,7 +408,7 @@ Resolution resolveScene(gpu::Context& context, Scene scene, uint32_t seed) {
     // Transmittance first: its pilot traces paths to the base depth only, and the path-depth
     // pilot then renders with the transmittance pmf the render will use.
     TransmittanceEstimatorSettings& t = scene.integrator.transmittance;
-    if (t.type == TransmittanceEstimatorType::DebiasedRayMarch && t.pmf.type == PmfType::Auto) {
+    if (transmittancePmfIsAuto(scene.integrator)) {
         if (scene.media.empty()) {
             t.pmf = defaultTransmittancePmf();
             t.pmf.origin = "auto: the scene has no media, so no transmittance is estimated (the default pmf)";
@@ -419,7 +419,7 @@ Resolution resolveScene(gpu::Context& context, Scene scene, uint32_t seed) {
         }
     }
     DebiasSettings& d = scene.integrator.debias;
-    if (d.estimator != DebiasEstimator::None && d.pmf.type == PmfType::Auto) {
+    if (debiasPmfIsAuto(scene.integrator)) {
         pilots.push_back(runPmfPilot(context, scene, seed));
         d.pmf = pilots.back().chosen.pmf;
         d.pmf.origin = chosen;

@@ -307,12 +307,20 @@ struct IntegratorSettings {
 
 inline bool usesPhotons(const IntegratorSettings& s) { return s.type != IntegratorType::PathTracer; }
 
-// The scene key of a pmf "auto" that a pilot has not yet resolved (render/pmf_pilot.h
-// resolveScene), or "" when there is none: the path-depth pmf first, then the transmittance's.
+// Whether the path-depth pmf, and debiased ray marching's pmf, are "auto" in settings that use
+// them: what a pilot resolves (render/pmf_pilot.h resolveScene).
+inline bool debiasPmfIsAuto(const IntegratorSettings& s) {
+    return s.debias.estimator != DebiasEstimator::None && s.debias.pmf.type == PmfType::Auto;
+}
+inline bool transmittancePmfIsAuto(const IntegratorSettings& s) {
+    return s.transmittance.type == TransmittanceEstimatorType::DebiasedRayMarch && s.transmittance.pmf.type == PmfType::Auto;
+}
+
+// The scene key of a pmf "auto" that a pilot has not yet resolved, or "" when there is none: the
+// path-depth pmf first, then the transmittance's.
 inline const char* autoPmfKey(const IntegratorSettings& s) {
-    if (s.debias.estimator != DebiasEstimator::None && s.debias.pmf.type == PmfType::Auto) return "integrator.debias.pmf.type";
-    if (s.transmittance.type == TransmittanceEstimatorType::DebiasedRayMarch && s.transmittance.pmf.type == PmfType::Auto)
-        return "integrator.transmittance_estimator.pmf.type";
+    if (debiasPmfIsAuto(s)) return "integrator.debias.pmf.type";
+    if (transmittancePmfIsAuto(s)) return "integrator.transmittance_estimator.pmf.type";
     return "";
 }
 

@@ -54,10 +54,8 @@ void takeRecordedPmfs(Scene& scene, const Checkpoint& c, const std::string& path
                                     "the scene, or render again");
     const Scene recorded = reproduceScene(c.scene, scene.path, c.settings);
     IntegratorSettings& in = scene.integrator;
-    if (in.debias.estimator != DebiasEstimator::None && in.debias.pmf.type == PmfType::Auto)
-        in.debias.pmf = recorded.integrator.debias.pmf;
-    if (in.transmittance.type == TransmittanceEstimatorType::DebiasedRayMarch && in.transmittance.pmf.type == PmfType::Auto)
-        in.transmittance.pmf = recorded.integrator.transmittance.pmf;
+    if (debiasPmfIsAuto(in)) in.debias.pmf = recorded.integrator.debias.pmf;
+    if (transmittancePmfIsAuto(in)) in.transmittance.pmf = recorded.integrator.transmittance.pmf;
     if (const char* left = autoPmfKey(in); *left)
         throw InputError(path, left, "the checkpoint records this pmf as \"auto\" too: it has no pilot's choice to resume with");
 }
