@@ -22,10 +22,14 @@ layout(binding = kBindingSortedTexels) uniform usamplerBuffer sortedTexels;
 
 // The glossy BSDF of the gather vertex being summed (gGlossy: set by sliceKernelSums), in the
 // frame (t, b, n) around the normal facing the camera chain, wi towards the chain (local): each
-// photon's factor f(wi, wo) = eval / cos wo (the photon's flux carries the cosine). Lambertian
-// vertices keep f outside the sums; scenes without glossy materials fold all of it away.
+// photon's factor f(wi, wo) = eval / |cos wo| (the photon's flux carries the cosine). A rough
+// dielectric keeps its outward normal (wi.z < 0 inside) and takes photons from both sides
+// (bothSides), those from the far side refracted with their radiance scaling (shared/bsdf.h
+// roughRefractionRadianceScale; off with the camera side's scaling in the test's control).
+// Lambertian vertices keep f outside the sums; scenes without glossy materials fold all of it away.
 struct GlossyVertex {
     bool on;
+    bool bothSides;
     MaterialGpu m;
     vec3 t, b, n, wi;
 };
@@ -34,10 +38,13 @@ GlossyVertex gGlossy;
 vec3 photonBsdf(vec3 w) {
     if (kBsdfFamilies == 0u || !gGlossy.on) return vec3(1.0);
     vec3 wo = vec3(dot(w, gGlossy.t), dot(w, gGlossy.b), dot(w, gGlossy.n));
-    if (!(wo.z > 0.0)) return vec3(0.0);
-    return kTestCosine ? glossyEval(gGlossy.m, gGlossy.wi, wo) : glossyEval(gGlossy.m, gGlossy.wi, wo) / wo.z;
+    if (!(wo.z > 0.0) && !(gGlossy.bothSides && wo.z < 0.0)) return vec3(0.0);
+    vec3 f = glossyEval(gGlossy.m, gGlossy.wi, wo);
+    if (gGlossy.bothSides && kRadianceScaling) f *= roughRefractionRadianceScale(gGlossy.m.ior, gGlossy.wi, wo);
+    return kTestCosine ? f : f / abs(wo.z);
 }
 #define PHOTON_BSDF(w) photonBsdf(w)
+#define PHOTON_BOTH_SIDES ((kBsdfFamilies & kFamilyRoughDielectric) != 0u && gGlossy.bothSides)
 #include "photon_gather.glsl"
 #include "accumulate.glsl"
 
@@ -56,9 +63,15 @@ vec3 directLight(vec3 p, vec3 ng, vec3 n, vec3 albedo, bool glossy, MaterialGpu 
     LightSample ls;
     if (!sampleLight(p, rng, ls)) return vec3(0.0);
     float cosS = dot(n, ls.wi);
-    if (cosS <= 0.0) return vec3(0.0);
+    // a rough dielectric (outward n) also takes light from behind, refracted as a photon would be
+    bool dielectric = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && glossy && m.type == kBsdfRoughDielectric;
+    if (!(cosS > 0.0) && !(dielectric && cosS < 0.0)) return vec3(0.0);
     vec3 value = ls.weight * cosS;
-    if (kBsdfFamilies != 0u && glossy) value = ls.weight * glossyEval(m, wi, vec3(dot(ls.wi, t), dot(ls.wi, b), cosS));
+    if (kBsdfFamilies != 0u && glossy) {
+        vec3 wo = vec3(dot(ls.wi, t), dot(ls.wi, b), cosS);
+        value = ls.weight * glossyEval(m, wi, wo);
+        if (dielectric && kRadianceScaling) value *= roughRefractionRadianceScale(m.ior, wi, wo);
+    }
     if (!any(greaterThan(value, vec3(0.0)))) return vec3(0.0);
     vec3 o = offsetRayOrigin(p, ng, ls.wi);
     float tMax = ls.dist < kInfinity ? max(ls.dist - length(o - p), 0.0) : kInfinity;
@@ -159,7 +172,10 @@ GatherVertex traceCameraChain(vec3 origin, vec3 dir, inout Rng rng) {
             break;
         }
         if (kBsdfFamilies != 0u && isGlossyBsdf(m.type)) {
-            if (!front && !kTwoSided) break;
+            // a rough dielectric: seen from either side, in its outward frame (as in the path tracer)
+            bool dielectric = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && m.type == kBsdfRoughDielectric;
+            if (!front && !kTwoSided && !dielectric) break;
+            if (dielectric) n = ns;
             vec3 t, b;
             buildFrame(n, t, b);
             vec3 wi = vec3(dot(-dir, t), dot(-dir, b), dot(-dir, n));
@@ -232,9 +248,11 @@ GatherVertex loadGatherVertex(AccumRef block, uint at) {
 // The glossy BSDF of a gather vertex for photonBsdf (off at a Lambertian one).
 void setGlossyVertex(GatherVertex gv) {
     gGlossy.on = false;
+    gGlossy.bothSides = false;
     if (kBsdfFamilies == 0u || gv.material == kNoGlossy) return;
     gGlossy.on = true;
     gGlossy.m = sceneMaterial(gv.material);
+    gGlossy.bothSides = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && gGlossy.m.type == kBsdfRoughDielectric;
     gGlossy.m.albedo = gv.albedo;
     gGlossy.m.roughness = gv.roughness;
     gGlossy.m.substrateWeight = gv.substrateWeight;

@@ -156,7 +156,7 @@ void saveRecord(uint lane, PathState p, Rng rng, uint g, float rays, uint flags)
     r.v[4] = uvec4(floatBitsToUint(p.result.correction), (p.specularPrev ? 1u : 0u) | (p.fromSurface ? 2u : 0u));
     r.v[5] = uvec4(floatBitsToUint(p.lastVertex), p.medium);
     r.v[6] = uvec4(p.mediumScatters, rng.state, rng.inc, g);
-    r.v[7] = uvec4(floatBitsToUint(gFilterWeight), floatBitsToUint(rays), 0u, 0u);
+    r.v[7] = uvec4(floatBitsToUint(gFilterWeight), floatBitsToUint(rays), floatBitsToUint(p.etaScale), 0u);
     recordFlags().f[lane] = kRecordPending | flags;
     atomicAdd(loopStats().u[kLoopStatCarried], 1u);
 }
@@ -185,6 +185,7 @@ bool takeRecord(uint lane, inout PathState p, inout Rng rng, inout uint g, inout
     p.lastVertex = uintBitsToFloat(v5.xyz);
     p.medium = v5.w;
     p.mediumScatters = v6.x;
+    p.etaScale = uintBitsToFloat(v7.z);
     rng.state = v6.y;
     rng.inc = v6.z;
     g = v6.w;

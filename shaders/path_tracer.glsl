@@ -64,6 +64,8 @@ vec3 sampleDirectGlossy(vec3 p, vec3 ng, vec3 n, vec3 t, vec3 b, vec3 wi, Materi
     vec3 wo = vec3(dot(ls.wi, t), dot(ls.wi, b), dot(ls.wi, n));
     if (wo.z == 0.0) return vec3(0.0);
     vec3 f = glossyEval(m, wi, wo);
+    if ((kBsdfFamilies & kFamilyRoughDielectric) != 0u && m.type == kBsdfRoughDielectric)
+        f *= roughRefractionRadianceScale(m.ior, wi, wo);  // the BSDF-sampled paths' scaling, below
     if (!any(greaterThan(f, vec3(0.0)))) return vec3(0.0);
     float mis = ls.pdf > 0.0 ? powerHeuristic(ls.pdf, glossyPdf(m, wi, wo)) : 1.0;
     vec3 value = f * ls.weight * mis;
@@ -108,6 +110,7 @@ struct PathState {
     bool fromSurface;   // the last vertex is a surface (or the camera), not a medium point
     vec3 lastVertex;    // the last scattering vertex (for light pdfs across forward surfaces)
     uint mediumScatters;  // medium scattering events since the last surface (Tungsten's MediumState::bounce)
+    float etaScale;     // product of the refractions' radiance scalings so far (Russian roulette divides it out)
 };
 
 PathState beginPath(vec3 origin, vec3 dir, uint level) {
@@ -126,6 +129,7 @@ PathState beginPath(vec3 origin, vec3 dir, uint level) {
     s.fromSurface = true;
     s.lastVertex = origin;
     s.mediumScatters = 0u;
+    s.etaScale = 1.0;
     return s;
 }
 
@@ -288,6 +292,14 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         s.specularPrev = false;
     } else if (kHasSpecular && isSpecularBsdf(m.type)) {
         s.throughput *= scatterSpecular(m, front, n, s.dir, rng);
+        // Radiance crossing a refraction scales by (n_camera side / n_light side)^2 (shared/bsdf.h):
+        // it cancels on a path that leaves the dielectric again, and not where a light lies beyond an
+        // open interface (Tungsten 0.2.2 renders the sky through a dielectric plate so).
+        if (m.type == kBsdfDielectric && dot(s.dir, n) < 0.0) {
+            float scale = refractionRadianceScale(m, front);
+            s.throughput *= scale;
+            s.etaScale *= scale;
+        }
         s.specularPrev = true;
 #ifdef TELESCOPE_GLOSSY
     } else if (kBsdfFamilies != 0u && isGlossyBsdf(m.type)) {
@@ -309,6 +321,11 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         if (!glossySample(m, wi, rng, wo, weight, pdf, specular)) return false;
         s.dir = normalize(t * wo.x + b * wo.y + nf * wo.z);
         s.throughput *= weight;
+        if (dielectric) {  // radiance scaling of a refraction, as at a smooth dielectric above
+            float scale = roughRefractionRadianceScale(m.ior, wi, wo);
+            s.throughput *= scale;
+            s.etaScale *= scale;
+        }
         s.pdfPrev = pdf;
         s.specularPrev = specular;
     } else if ((kBsdfFamilies & kFamilyThinSheet) != 0u && m.type == kBsdfThinSheet) {
@@ -323,7 +340,7 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     // not the expectation, of every level. Derivative renders turn it off (kRoulette): its survival
     // decisions depend on the throughput, so they would differ between the parameter's values.
     if (kRoulette && v > 1u) {
-        float q = maxComponent(abs(s.throughput));
+        float q = maxComponent(abs(s.throughput)) / s.etaScale;
         if (q < 1.0) {
             if (rngNext(rng) >= q) return false;
             s.throughput /= q;

@@ -1,7 +1,8 @@
 // The photon-map lookup (GLSL only; after the PhotonMapRef declarations): ONE traversal of the
 // 2x2x2 cells around x accumulates, from the same photons, the kernel sum at r_b and the
 // closed-form difference K_{r'} - K_r (shared/photon_density.h). Photons arriving from behind
-// the surface (dot(w_i, n) <= 0) are rejected.
+// the surface (dot(w_i, n) <= 0) are rejected, unless the includer's PHOTON_BOTH_SIDES says the
+// gather vertex takes both sides (gather.comp: a rough dielectric, whose BSDF transmits them).
 //
 // Lavapipe ends the loops of a shader invocation after 65535 iterations in all, without a word,
 // and a bucket may hold millions of photons. One call therefore reads photons sliceBegin ..
@@ -28,6 +29,9 @@ uvec4 sortedTexel(Uvec4ArrayRef sorted, uint t) {
 // whose constant f the caller multiplies the sums by.
 #ifndef PHOTON_BSDF
 #define PHOTON_BSDF(w) vec3(1.0)
+#endif
+#ifndef PHOTON_BOTH_SIDES
+#define PHOTON_BOTH_SIDES false
 #endif
 
 struct GatherSums {
@@ -89,7 +93,7 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
             if (!(d2 < rb2) || position.w > maxVertex) continue;
             uvec4 rest = sortedTexel(sorted, 2u * i + 1u);  // power, direction
             vec3 w = decodeDirection(rest.w);
-            if (dot(w, n) <= 0.0) continue;
+            if (dot(w, n) <= 0.0 && !PHOTON_BOTH_SIDES) continue;
             vec3 power = uintBitsToFloat(rest.xyz) * PHOTON_BSDF(w);
             s.found += 1u;
             s.base += power * kernelWeight(kernel, d2, rb2);
@@ -160,8 +164,8 @@ void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint k, uint sliceBegin,
 }
 
 // The estimate over the k nearest: kernel radius r_k^2 (the root: the farthest kept) when all k
-// slots are full, else r_b^2; photons arriving from behind the surface, or stored beyond
-// maxVertex, add nothing but count among the k, as in Tungsten.
+// slots are full, else r_b^2; photons arriving from behind the surface (at a vertex that does not
+// take both sides), or stored beyond maxVertex, add nothing but count among the k, as in Tungsten.
 GatherSums nearestSums(PhotonMapRef map, NearestPhotons s, vec3 n, float rb2, uint k, uint kernel, uint maxVertex) {
     GatherSums g;
     g.base = vec3(0.0);
@@ -174,7 +178,7 @@ GatherSums nearestSums(PhotonMapRef map, NearestPhotons s, vec3 n, float rb2, ui
         uvec4 rest = sortedTexel(sorted, 2u * s.index[j] + 1u);
         g.found += 1u;
         vec3 w = decodeDirection(rest.w);
-        if (dot(w, n) <= 0.0 || sortedTexel(sorted, 2u * s.index[j]).w > maxVertex) continue;
+        if ((dot(w, n) <= 0.0 && !PHOTON_BOTH_SIDES) || sortedTexel(sorted, 2u * s.index[j]).w > maxVertex) continue;
         g.base += uintBitsToFloat(rest.xyz) * PHOTON_BSDF(w) * nearestKernelWeight(kernel, s.d2[j], r2);
     }
     return g;

@@ -143,9 +143,13 @@ void tracePhotonPath() {
         // ---- Store where the material has a non-delta lobe ----
         // (A mixture's photon is stored before it picks the component it scatters by: the incident
         // flux does not depend on that choice, and a gather there draws its own component.)
+        // A rough dielectric (or a composite with one: kMaterialBothSides) keeps photons on both
+        // sides: its gather transmits those from the far side.
         bool nonDelta = m.type == kBsdfLambert ||
                         (kBsdfFamilies != 0u && (isGlossyBsdf(m.type) || m.type == kBsdfMixed || m.type == kBsdfTransparency));
-        if (nonDelta && (front || kTwoSided) && (!kNextEvent || !direct)) storePhoton(map, photons, capacity, p, -dir, power, v);
+        bool bothSides = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && (m.flags & kMaterialBothSides) != 0u;
+        if (nonDelta && (front || kTwoSided || bothSides) && (!kNextEvent || !direct))
+            storePhoton(map, photons, capacity, p, -dir, power, v);
 
         // ---- Scatter ----
         if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
@@ -170,19 +174,24 @@ void tracePhotonPath() {
         } else if (kHasSpecular && isSpecularBsdf(m.type)) {
             scale *= scatterSpecular(m, front, n, dir, rng);
         } else if (kBsdfFamilies != 0u && isGlossyBsdf(m.type)) {
-            // The glossy materials photon mapping takes are reciprocal (f(wi, wo) = f(wo, wi):
-            // tests/unit/glossy_bsdf_test.cpp), so a photon samples them as a camera path does,
-            // with wi towards where it came from, and its weight eval / pdf carries the cosine on
-            // the side it leaves by.
-            if (!front && !kTwoSided) return;
+            // A photon samples the glossy materials as a camera path does, with wi towards where it
+            // came from: the weight eval(wi, wo) / pdf is f(wi -> wo) |cos wo| / pdf, the flux it
+            // carries on towards wo. The reflecting materials are reciprocal (tests/unit/
+            // glossy_bsdf_test.cpp); the rough dielectric's refraction is not, and its eval carries
+            // the eta^2 of wo's side, which is f for light travelling from wi to wo (shared/bsdf.h
+            // roughRefractionRadianceScale). A rough dielectric keeps its outward frame, as in the
+            // path tracer (wi.z < 0 inside).
+            bool dielectric = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && m.type == kBsdfRoughDielectric;
+            if (!front && !kTwoSided && !dielectric) return;
+            vec3 nf = dielectric ? ns : n;
             vec3 t, b;
-            buildFrame(n, t, b);
-            vec3 wi = vec3(dot(-dir, t), dot(-dir, b), dot(-dir, n));
+            buildFrame(nf, t, b);
+            vec3 wi = vec3(dot(-dir, t), dot(-dir, b), dot(-dir, nf));
             vec3 wo, weight;
             float pdf;
             bool dirac;
             if (!glossySample(m, wi, rng, wo, weight, pdf, dirac)) return;
-            dir = normalize(t * wo.x + b * wo.y + n * wo.z);
+            dir = normalize(t * wo.x + b * wo.y + nf * wo.z);
             scale *= weight;
         } else {
             return;  // null: black and opaque

@@ -88,6 +88,19 @@ FN float refractionRadianceScale(MaterialGpu m, bool front) {
     return 1.0f / (eta * eta);
 }
 
+// The same for a rough dielectric, where photon mapping gathers at the interface itself: its BTDF
+// for light travelling from a to b is n_b^2 S(a, b) with S symmetric (Walter et al. 2007; Veach's
+// generalised reciprocity f(a->b) / n_b^2 = f(b->a) / n_a^2). glossyEval(wi, wo) carries n_wo^2:
+// f(wi->wo) |cos wo|, the weight a photon arriving from wi and leaving towards wo needs
+// (photon_trace.comp samples it so, unchanged). A gather seen from wi, of a photon that arrived from
+// wo, needs f(wo->wi), i.e. glossyEval times this ratio: 1 for reflection, (n_wi / n_wo)^2 for
+// refraction (local frame, z outward, wi.z < 0 inside).
+FN float roughRefractionRadianceScale(float ior, vec3 wi, vec3 wo) {
+    if (wi.z * wo.z >= 0.0f) return 1.0f;
+    float eta = wi.z < 0.0f ? ior : 1.0f / ior;
+    return eta * eta;
+}
+
 // ---- Thin sheet (Tungsten's ThinSheetBsdf and Fresnel::thinFilmReflectance*): a dielectric slab
 // of index ior in vacuum, thin enough that the reflected and transmitted rays leave where they
 // entered. Reflection is specular, transmission goes straight on (a forward lobe). ----

@@ -38,6 +38,7 @@ struct MaterialGpu {
 };
 CONST uint kMaterialRefraction = 1u;  // flags: dielectric transmits
 CONST uint kMaterialInterference = 2u;  // flags: thinsheet with thin-film interference
+CONST uint kMaterialBothSides = 4u;  // flags: photons are stored on both sides (a rough dielectric, or a composite with one)
 
 // ---- Textures (type: kTexture*; shared/texture.h) ----
 // Constant: value = on. Checker: on, off, res = (res_u, res_v). Bitmap: scale = on, res = (width,

@@ -182,6 +182,25 @@ GpuScene buildGpuScene(const Scene& scene) {
         f.textures = f.textures || m.albedoTexture >= 0 || m.roughnessTexture >= 0;
         if (m.type == BsdfType::Forward) f.media = true;
     }
+    // Photon mapping stores photons on both sides of a rough dielectric and of a composite that may
+    // resolve to one (the store comes before the composite's draw: photon_trace.comp). Composites
+    // nest (mixed of mixed), so the flag spreads until nothing changes.
+    for (size_t i = 0; i < scene.materials.size(); ++i)
+        if (scene.materials[i].type == BsdfType::RoughDielectric) out.materials[i].flags |= shader::kMaterialBothSides;
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (size_t i = 0; i < scene.materials.size(); ++i) {
+            const Material& m = scene.materials[i];
+            const bool composite = m.type == BsdfType::Mixed || m.type == BsdfType::Transparency;
+            const int components = m.type == BsdfType::Mixed ? 2 : 1;
+            if (!composite || (out.materials[i].flags & shader::kMaterialBothSides) != 0u) continue;
+            for (int c = 0; c < components; ++c)
+                if ((out.materials[m.component[c]].flags & shader::kMaterialBothSides) != 0u) {
+                    out.materials[i].flags |= shader::kMaterialBothSides;
+                    changed = true;
+                }
+        }
+    }
     if (out.materials.empty()) out.materials.push_back({});  // keep the buffer non-empty
 
     // ---- BVH over the geometry; prims are stored in leaf order ----

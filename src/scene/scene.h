@@ -71,10 +71,6 @@ struct Material {
     float alpha = 1.0f;
 };
 
-// Whether the photon tracer and gather implement a material (the rough dielectric is path
-// tracing's: its transmission is not reciprocal, so a photon cannot sample it as a camera path does).
-inline bool photonsSupport(BsdfType t) { return t != BsdfType::RoughDielectric; }
-
 enum class GeometryType : uint32_t {
     Triangle = shader::kPrimTriangle, Sphere = shader::kPrimSphere, Disk = shader::kPrimDisk, Quad = shader::kPrimQuad
 };

@@ -743,8 +743,6 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"PlasticNegativeThickness", R"({"bsdfs": [{"type": "plastic", "thickness": -1}]})", "", "bsdfs[0].thickness", "must not be negative"},
         BadInput{"RoughDielectricZeroIor", R"({"bsdfs": [{"type": "rough_dielectric", "ior": 0}]})", "", "bsdfs[0].ior", "must be positive"},
         BadInput{"OrenNayarRoughnessCheckerFractionalRes", R"({"bsdfs": [{"type": "oren_nayar", "roughness": {"type": "checker", "res_v": 2.5}}]})", "", "bsdfs[0].roughness.res_v", "expected an integer"},
-        BadInput{"RoughDielectricWithPhotons", R"({"primitives": [{"type": "quad", "bsdf": {"type": "rough_dielectric"}}], "integrator": {"type": "progressive_photon_map", "gather_radius": 0.1}})", "", "primitives[0].bsdf.type", "photon mapping does not implement"},
-        BadInput{"NamedRoughDielectricWithPhotons", R"({"bsdfs": [{"name": "frost", "type": "rough_dielectric"}], "primitives": [{"type": "quad", "bsdf": "frost"}], "integrator": {"type": "photon_map", "gather_radius": 0.1}})", "", "bsdfs[0].type", "photon mapping does not implement"},
         BadInput{"MixedTexturedRatio", R"({"bsdfs": [{"name": "a", "type": "lambert"}, {"type": "mixed", "bsdf0": "a", "bsdf1": "a", "ratio": "r.png"}]})", "", "bsdfs[1].ratio", "a textured ratio is not supported"},
         BadInput{"MixedRatioAboveOne", R"({"bsdfs": [{"name": "a", "type": "lambert"}, {"type": "mixed", "bsdf0": "a", "bsdf1": "a", "ratio": 1.5}]})", "", "bsdfs[1].ratio", "must be in [0, 1]"},
         BadInput{"MixedWithoutBsdf1", R"({"bsdfs": [{"name": "a", "type": "lambert"}, {"type": "mixed", "bsdf0": "a"}]})", "", "bsdfs[1].bsdf1", "needs"},
@@ -760,7 +758,6 @@ INSTANTIATE_TEST_SUITE_P(
             for (int i = 0; i < 9; ++i) b = R"({"type": "transparency", "alpha": 0.5, "base": )" + b + "}";
             return b;
         }() + "}"), "", "primitives[0].bsdf", "nest at most 8 deep"},
-        BadInput{"MixedOfARefusedBsdfWithPhotons", R"({"primitives": [{"type": "quad", "bsdf": {"type": "mixed", "bsdf0": {"type": "lambert"}, "bsdf1": {"type": "rough_dielectric"}}}], "integrator": {"type": "photon_map", "gather_radius": 0.1}})", "", "primitives[0].bsdf.bsdf1.type", "photon mapping does not implement"},
         BadInput{"UnknownBsdfType", R"({"bsdfs": [{"type": "velvet"}]})", "", "bsdfs[0].type", "unknown bsdf type 'velvet'"},
         BadInput{"UnknownBsdfName", withPrimitive(kQuad + "," + R"({"type": "quad", "bsdf": "black"})"), "", "primitives[1].bsdf", "unknown bsdf 'black'"},
         BadInput{"MissingBsdf", withPrimitive(R"({"type": "sphere"})"), "", "primitives[0]", "missing 'bsdf'"},

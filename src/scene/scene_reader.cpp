@@ -174,13 +174,6 @@ void SceneReader::read(const json& doc) {
         filter != PixelFilter::Tent)
         fail("camera.reconstruction_filter", fmt::format("photon mapping supports the dirac, box and tent filters, not '{}'",
                                                          nameOf(kPixelFilterNames, filter)));
-    // Photon tracing and the gather implement the materials of photonsSupport() only.
-    if (usesPhotons(scene_.integrator))
-        for (const Material& m : scene_.materials)
-            if (!photonsSupport(m.type))
-                fail(member(m.key, "type"),
-                     "photon mapping does not implement this bsdf; render the scene with "
-                     "integrator.type \"path_tracer\"");
     ignoreUnread(doc, "", {"media", "bsdfs", "primitives", "camera", "integrator", "renderer"});
 }
 
