@@ -99,11 +99,12 @@ TEST_F(PhotonRefraction, UnbiasedBlocksAtARoughWaterSurfaceMatchThePathTracerAnd
     // photons sample the surface with eval / pdf unscaled (their flux). The path tracer scales the
     // refractions of its own paths (which cancel here, since they leave the water to reach the
     // light). The control drops the gather's scaling (test_radiance_scaling false): the light from
-    // below is then 1.77 times too bright, most of what the camera sees (measured: 1.5-2x in every
-    // region, t +3.5 to +10; 8 of 16 beyond the family-wise limit, the blocks' tail being heavy).
+    // below is then 1.77 times too bright, most of what the camera sees (measured: t +4.6 to +9.6 in
+    // every region, 9 of 16 beyond the family-wise limit, the blocks' tail being heavy). A wide base
+    // radius (0.4) and 5000 photon paths a pass keep the test at 7 s.
     const std::vector<RegionMean> reference =
         blockMeans(renderFilm(pool(R"({"type": "path_tracer", "max_bounces": 64})", kRoughWater), 2048, 13), kBlock);
-    const std::string unbiased = R"({"type": "photon_map", "photon_count": 10000, "gather_radius": 0.2,
+    const std::string unbiased = R"({"type": "photon_map", "photon_count": 5000, "gather_radius": 0.4,
         "max_bounces": 64, "debias": {"estimator": "single_term", "level_schedule": "uniform"})";
     const BatchVerdict right = compare(pool(unbiased + "}", kRoughWater), reference, "rough surface");
     EXPECT_EQ(right.failures, 0u);
