@@ -236,7 +236,17 @@ vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, 
     if (kTrEstimatorType == kTrEstTaylor)
         return trTaylor(sceneTrEstimator(), mediumModel(mi), trFormOf(startOnSurface, endOnSurface), s, rng, lookups,
                         kTaylorExact);
-    return trEstimate(sceneTrEstimator(), mediumModel(mi), trFormOf(startOnSurface, endOnSurface), s, rng, lookups);
+    // trEstimate's dispatch, on the specialisation constant itself: trEstimate reads the type from
+    // its argument, which the host's optimizer cannot fold, so every estimator reached lavapipe and
+    // was optimised there before it was dropped (about 1.5 s of pipeline creation on the slab).
+    TrModel model = mediumModel(mi);
+    uint form = trFormOf(startOnSurface, endOnSurface);
+    if (!(s.len > 0.0)) return vec3(trForm(model, form, 0.0));
+    if (kTrEstimatorType == kTrEstRayMarch) return trRayMarch(kTrLevel, model, form, s, rng, lookups);
+    if (kTrEstimatorType == kTrEstDebiasedRayMarch)
+        return trDebiasedRayMarch(sceneTrEstimator(), model, form, s, rng, lookups);
+    if (kTrEstimatorType == kTrEstUnbiasedRayMarch) return trUnbiasedRayMarch(s, rng, lookups);
+    return trTrack(kTrEstimatorType, s, rng, lookups);
 }
 
 // ---- Medium boundaries ----
