@@ -76,6 +76,20 @@ vec3 gridEmissionAt(uint mi, vec3 p) {
     return e;
 }
 
+// trForm3 and trForm with the scene's shared model (kSceneTrModel) folded in where it is the
+// exponential: a condition on the constant alone, which the host's optimizer removes with
+// everything it guards (pipeline creation on the absorbing slab with debiased marching: 1.73 s
+// -> see docs/BENCHMARKS.md). Other shared models keep trForm's dispatch, which lavapipe folds.
+vec3 mediumForm3(TrModel m, uint form, vec3 tau) {
+    if (kSceneTrModel == kTrExponential) return exp(-tau);
+    return trForm3(m, form, tau);
+}
+float mediumForm(TrModel m, uint form, float tau) {
+    if (kSceneTrModel == kTrExponential) return exp(-max(tau, 0.0));
+    return trForm(m, form, tau);
+}
+#define TR_FORM3 mediumForm3
+#define TR_FORM mediumForm
 #define TR_GRID_DENSITY(s, t) gridDensityAt((s).medium, (s).origin + (s).dir * (t))
 #define TR_TAYLOR_OUTSIDE_DISPATCH  // mediumTransmittance calls trTaylor under kTrEstimatorType alone
 #include "shared/transmittance_estimators.h"
@@ -223,10 +237,10 @@ const bool kGridTracking = kHasGrids && (kTrEstimatorType == kTrEstDeltaTracking
                                           kTrEstimatorType == kTrEstResidualRatioTracking);
 vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, bool endOnSurface, inout Rng rng) {
     if (kCombExactEverywhere)
-        return trForm3(mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
+        return mediumForm3(mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
                        sceneMedium(mi).sigmaT * (sceneMedium(mi).density * max(l, 0.0)));
     if (kCombEstimator && sceneMedium(mi).type == kMediumHomogeneous)
-        return trForm3(mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
+        return mediumForm3(mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
                        sceneMedium(mi).sigmaT * (sceneMedium(mi).density * max(l, 0.0)));
     uint lookups = 0u;
     TrSegment s = mediumSegment(mi, o, d, l);
@@ -241,7 +255,7 @@ vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, 
     // was optimised there before it was dropped (about 1.5 s of pipeline creation on the slab).
     TrModel model = mediumModel(mi);
     uint form = trFormOf(startOnSurface, endOnSurface);
-    if (!(s.len > 0.0)) return vec3(trForm(model, form, 0.0));
+    if (!(s.len > 0.0)) return vec3(mediumForm(model, form, 0.0));
     if (kTrEstimatorType == kTrEstRayMarch) return trRayMarch(kTrLevel, model, form, s, rng, lookups);
     if (kTrEstimatorType == kTrEstDebiasedRayMarch)
         return trDebiasedRayMarch(sceneTrEstimator(), model, form, s, rng, lookups);
@@ -347,7 +361,7 @@ bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, ino
         float t = t0 + depth / mu;
         if (t < t0 + whole.len) {
             // Scatter at t
-            float pdf = mu * sigmaBar * trForm(model, trFormOf(fromSurface, false), depth);
+            float pdf = mu * sigmaBar * mediumForm(model, trFormOf(fromSurface, false), depth);
             p = o + d * t;
             vec3 sigmaS = sceneMedium(mi).sigmaS * mediumDensityAt(mi, p);
             if (!(pdf > 0.0)) {
@@ -363,7 +377,7 @@ bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, ino
         }
     }
     // Pass to the surface at l
-    float pass = (mu > 0.0 && whole.len > 0.0) ? trForm(model, trFormOf(fromSurface, true), mu * whole.len) : 1.0;
+    float pass = (mu > 0.0 && whole.len > 0.0) ? mediumForm(model, trFormOf(fromSurface, true), mu * whole.len) : 1.0;
     if (!(pass > 0.0)) {
         throughput = vec3(0.0);
         return false;

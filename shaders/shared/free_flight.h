@@ -9,6 +9,9 @@
 #define TELESCOPE_FREE_FLIGHT_H
 
 #include "shared/transmittance.h"
+#ifndef TR_FORM
+#define TR_FORM trForm  // the includer may fold in the scene's model (shared/transmittance_estimators.h)
+#endif
 
 SHADER_NAMESPACE_BEGIN
 
@@ -59,10 +62,10 @@ FN float sampleGuideDepth(TrModel model, bool fromSurface, float u) {
     float target = 1.0f - u;
     float lo = 0.0f, hi = 1.0f;
     LOOP_BUDGET_TICK(96u);  // the two loops below
-    for (uint i = 0u; i < 64u && trForm(model, form, hi) > target; ++i) hi *= 2.0f;
+    for (uint i = 0u; i < 64u && TR_FORM(model, form, hi) > target; ++i) hi *= 2.0f;
     for (uint i = 0u; i < 32u; ++i) {
         float mid = 0.5f * (lo + hi);
-        if (trForm(model, form, mid) > target) lo = mid;
+        if (TR_FORM(model, form, mid) > target) lo = mid;
         else hi = mid;
     }
     return 0.5f * (lo + hi);
@@ -91,8 +94,8 @@ FN bool sampleDiracFlight(TrModel model, vec3 sigmaT, vec3 sigmaS, float l, floa
         weight = pdf > 0.0f ? sigmaS * m / pdf : vec3(0.0f);
         return true;
     }
-    vec3 pass = vec3(trForm(model, kFormSurfaceMedium, sigmaT.x * l), trForm(model, kFormSurfaceMedium, sigmaT.y * l),
-                     trForm(model, kFormSurfaceMedium, sigmaT.z * l));
+    vec3 pass = vec3(TR_FORM(model, kFormSurfaceMedium, sigmaT.x * l), TR_FORM(model, kFormSurfaceMedium, sigmaT.y * l),
+                     TR_FORM(model, kFormSurfaceMedium, sigmaT.z * l));
     float pdf = (pass.x + pass.y + pass.z) / 3.0f;
     weight = pdf > 0.0f ? pass / pdf : vec3(0.0f);
     return false;

@@ -24,6 +24,17 @@
 
 SHADER_NAMESPACE_BEGIN
 
+// The segment weights the estimators evaluate: the includer may define TR_FORM3 and TR_FORM
+// (medium.glsl folds in the model every medium of the scene shares, which the host's optimizer
+// cannot see through trForm's model argument: without it, each of the estimators' calls carried
+// every model's code into pipeline creation).
+#ifndef TR_FORM3
+#define TR_FORM3 trForm3
+#endif
+#ifndef TR_FORM
+#define TR_FORM trForm
+#endif
+
 // Largest comb of debiased marching: 2^kTrMaxCombLog2 points; deeper levels are marched at this
 // size (a truncation of the telescope). Why a cap at all: (1) in single precision the correction's
 // rounding error, about 1e-7 g, is divided by p(j), so its second moment grows like
@@ -92,7 +103,7 @@ FN float combSum(TrSegment s, float u, uint first, uint stride, uint count, floa
 FN vec3 trRayMarch(uint k, TrModel m, uint form, TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
     float n = float(1u << k);
     float sum = combSum(s, rngNext(rng), 0u, 1u, 1u << k, n, lookups);
-    return trForm3(m, form, s.sigmaT * (sum * s.len / n));
+    return TR_FORM3(m, form, s.sigmaT * (sum * s.len / n));
 }
 
 // Debiased ray marching (docs/ESTIMATORS.md section 4): one comb of 2^(j+1) points, ordered as
@@ -114,7 +125,7 @@ FN vec3 trDebiasedRayMarch(TrEstimator e, TrModel m, uint form, TrSegment s, INO
     for (uint i = 0u; i < subCombs; ++i) {
         if (LOOP_BUDGET_SPENT(1u)) break;
         float sub = combSum(s, u, i, subCombs, subPoints, n, lookups);
-        base += trForm3(m, form, s.sigmaT * ldexp(sub * s.len, -int(k)));
+        base += TR_FORM3(m, form, s.sigmaT * ldexp(sub * s.len, -int(k)));
         if ((i & 1u) == 0u) {
             TR_PRECISE float y = sub - evenErr;
             TR_PRECISE float t = even + y;
@@ -130,9 +141,9 @@ FN vec3 trDebiasedRayMarch(TrEstimator e, TrModel m, uint form, TrSegment s, INO
     base = ldexp(base, ivec3(-int(j + 1u - k)));
     // Scalings by exact powers of two (ldexp): a device's approximate division would make tau_all
     // and tau_even differ by rounding, which <D_j> / p(j) amplifies.
-    vec3 gAll = trForm3(m, form, s.sigmaT * ldexp((even + odd) * s.len, -int(j + 1u)));
-    vec3 gEven = trForm3(m, form, s.sigmaT * ldexp(even * s.len, -int(j)));
-    vec3 gOdd = trForm3(m, form, s.sigmaT * ldexp(odd * s.len, -int(j)));
+    vec3 gAll = TR_FORM3(m, form, s.sigmaT * ldexp((even + odd) * s.len, -int(j + 1u)));
+    vec3 gEven = TR_FORM3(m, form, s.sigmaT * ldexp(even * s.len, -int(j)));
+    vec3 gOdd = TR_FORM3(m, form, s.sigmaT * ldexp(odd * s.len, -int(j)));
     vec3 d = gAll - 0.5f * (gEven + gOdd);
     return base + d / levelProbability(e.pmf, j - k);
 }
@@ -396,7 +407,7 @@ FN vec3 trTaylor(TrEstimator e, TrModel m, uint form, TrSegment s, INOUT(Rng) rn
 
 // ---- Dispatch over the estimators ----
 FN vec3 trEstimate(TrEstimator e, TrModel m, uint form, TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
-    if (!(s.len > 0.0f)) return vec3(trForm(m, form, 0.0f));
+    if (!(s.len > 0.0f)) return vec3(TR_FORM(m, form, 0.0f));
     if (e.type == kTrEstRayMarch) return trRayMarch(e.level, m, form, s, rng, lookups);
     if (e.type == kTrEstDebiasedRayMarch) return trDebiasedRayMarch(e, m, form, s, rng, lookups);
     if (e.type == kTrEstUnbiasedRayMarch) return trUnbiasedRayMarch(s, rng, lookups);
