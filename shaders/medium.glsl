@@ -76,17 +76,27 @@ vec3 gridEmissionAt(uint mi, vec3 p) {
     return e;
 }
 
-// trForm3 and trForm with the scene's shared model (kSceneTrModel) folded in where it is the
-// exponential: a condition on the constant alone, which the host's optimizer removes with
-// everything it guards (pipeline creation on the absorbing slab with debiased marching: 1.73 s
-// -> see docs/BENCHMARKS.md). Other shared models keep trForm's dispatch, which lavapipe folds.
-vec3 mediumForm3(TrModel m, uint form, vec3 tau) {
-    if (kSceneTrModel == kTrExponential) return exp(-tau);
-    return trForm3(m, form, tau);
-}
+// trForm and trForm3 with the model every medium of the scene shares (kSceneTrModel) called by
+// name: conditions on the constant alone, which the host's optimizer removes with everything they
+// guard (trForm's dispatch on its argument reached lavapipe whole, at each of the estimators'
+// calls: pipeline creation on the absorbing slab with debiased marching took 1.73 s, 0.4 s after;
+// docs/BENCHMARKS.md). Scenes whose media differ keep trForm's dispatch.
 float mediumForm(TrModel m, uint form, float tau) {
     if (kSceneTrModel == kTrExponential) return exp(-max(tau, 0.0));
+    if (kSceneTrModel == kTrLinear) return trLinearForm(m.a, form, max(tau, 0.0));
+    if (kSceneTrModel == kTrQuadratic) return trQuadraticForm(m.a, form, max(tau, 0.0));
+    if (kSceneTrModel == kTrDoubleExponential) return trDoubleExponentialForm(m.a, form, max(tau, 0.0));
+    if (kSceneTrModel == kTrErlang) return trErlangForm(m.a, form, max(tau, 0.0));
+    if (kSceneTrModel == kTrDavis) return trDavisForm(m.a, form, max(tau, 0.0));
+    if (kSceneTrModel == kTrDavisWeinstein) return trDavisWeinsteinForm(m.a, form, max(tau, 0.0));
+    if (kSceneTrModel == kTrPulse) return trPulseForm(m.a, form, max(tau, 0.0));
     return trForm(m, form, tau);
+}
+vec3 mediumForm3(TrModel m, uint form, vec3 tau) {
+    if (kSceneTrModel == kTrExponential) return exp(-tau);
+    if (kSceneTrModel != 0xffffffffu)
+        return vec3(mediumForm(m, form, tau.x), mediumForm(m, form, tau.y), mediumForm(m, form, tau.z));
+    return trForm3(m, form, tau);
 }
 #define TR_FORM3 mediumForm3
 #define TR_FORM mediumForm

@@ -79,62 +79,80 @@ FN float trPulseG(float tau, vec4 p) {
     return 1.0f - (2.0f / n) * (integral - 0.5f);
 }
 
+// One function per simple model (tau >= 0), so that a shader can call the one its scene uses
+// (medium.glsl mediumForm); trSimpleForm dispatches on the type.
+FN float trLinearForm(vec4 p, uint form, float tau) {
+    float m = p.x;
+    if (form == kFormSurfaceSurface) return max(1.0f - tau / m, 0.0f);
+    if (form == kFormSurfaceMedium) return tau < m ? 1.0f : 0.0f;
+    return 0.0f;  // Dirac at tau = max_t
+}
+
+FN float trQuadraticForm(vec4 p, uint form, float tau) {
+    float sb = trSimpleSigmaBar(kTrQuadratic, p);
+    float m = p.x;
+    float s = max(1.0f - tau / m, 0.0f);
+    if (form == kFormSurfaceSurface) return s * s;
+    if (form == kFormSurfaceMedium) return s;
+    return tau < m ? (2.0f / (m * m)) / (sb * sb) : 0.0f;
+}
+
+FN float trDoubleExponentialForm(vec4 p, uint form, float tau) {
+    float sb = trSimpleSigmaBar(kTrDoubleExponential, p);
+    float ea = exp(-p.x * tau), eb = exp(-p.y * tau);
+    if (form == kFormSurfaceSurface) return 0.5f * (ea + eb);
+    if (form == kFormSurfaceMedium) return 0.5f * (p.x * ea + p.y * eb) / sb;
+    return 0.5f * (p.x * p.x * ea + p.y * p.y * eb) / (sb * sb);
+}
+
+FN float trErlangForm(vec4 p, uint form, float tau) {
+    float sb = trSimpleSigmaBar(kTrErlang, p);
+    float lt = p.x * tau;
+    float e = exp(-lt);
+    if (form == kFormSurfaceSurface) return e * (1.0f + 0.5f * lt);
+    if (form == kFormSurfaceMedium) return e * (1.0f + lt);
+    return p.x * p.x * tau * e / sb;
+}
+
+// (1 + tau/a)^-e as exp(-e log1p(tau/a)): pow(1 + tau/a, -a) rounds 1 + tau/a to float first,
+// and for large a (the exponential limit) an error of an ulp there is multiplied by a. On
+// lavapipe the exact pow hid it; an NVIDIA H200's pow was 3460 standard errors off at
+// a = 1e6 (Stability.DavisNearItsLimits, first GPU run).
+FN float trDavisForm(vec4 p, uint form, float tau) {
+    float a = p.x;
+    float lb = log1pSafe(tau / a);
+    if (form == kFormSurfaceSurface) return exp(-a * lb);
+    if (form == kFormSurfaceMedium) return exp(-(a + 1.0f) * lb);
+    return (1.0f + 1.0f / a) * exp(-(a + 2.0f) * lb);
+}
+
+FN float trDavisWeinsteinForm(vec4 p, uint form, float tau) {
+    if (tau <= 0.0f) return form == kFormMediumMedium ? 0.0f : 1.0f;
+    vec3 d = trDavisWeinsteinTerms(tau, p);
+    if (form == kFormSurfaceSurface) return d.x;
+    if (form == kFormSurfaceMedium) return d.y;
+    return d.z;
+}
+
+FN float trPulseForm(vec4 p, uint form, float tau) {
+    if (form == kFormSurfaceSurface) return trPulseG(tau, p);
+    if (form == kFormSurfaceMedium) {
+        float n = p.z;
+        float x = clamp(floor(n * (tau - p.x) / (p.y - p.x) + 0.5f), 0.0f, n);
+        return 1.0f - x / n;
+    }
+    return 0.0f;  // Dirac comb
+}
+
 FN float trSimpleForm(uint type, vec4 p, uint form, float tau) {
     tau = max(tau, 0.0f);
-    float sb = trSimpleSigmaBar(type, p);
-    if (type == kTrLinear) {
-        float m = p.x;
-        if (form == kFormSurfaceSurface) return max(1.0f - tau / m, 0.0f);
-        if (form == kFormSurfaceMedium) return tau < m ? 1.0f : 0.0f;
-        return 0.0f;  // Dirac at tau = max_t
-    }
-    if (type == kTrQuadratic) {
-        float m = p.x;
-        float s = max(1.0f - tau / m, 0.0f);
-        if (form == kFormSurfaceSurface) return s * s;
-        if (form == kFormSurfaceMedium) return s;
-        return tau < m ? (2.0f / (m * m)) / (sb * sb) : 0.0f;
-    }
-    if (type == kTrDoubleExponential) {
-        float ea = exp(-p.x * tau), eb = exp(-p.y * tau);
-        if (form == kFormSurfaceSurface) return 0.5f * (ea + eb);
-        if (form == kFormSurfaceMedium) return 0.5f * (p.x * ea + p.y * eb) / sb;
-        return 0.5f * (p.x * p.x * ea + p.y * p.y * eb) / (sb * sb);
-    }
-    if (type == kTrErlang) {
-        float lt = p.x * tau;
-        float e = exp(-lt);
-        if (form == kFormSurfaceSurface) return e * (1.0f + 0.5f * lt);
-        if (form == kFormSurfaceMedium) return e * (1.0f + lt);
-        return p.x * p.x * tau * e / sb;
-    }
-    if (type == kTrDavis) {
-        // (1 + tau/a)^-e as exp(-e log1p(tau/a)): pow(1 + tau/a, -a) rounds 1 + tau/a to float first,
-        // and for large a (the exponential limit) an error of an ulp there is multiplied by a. On
-        // lavapipe the exact pow hid it; an NVIDIA H200's pow was 3460 standard errors off at
-        // a = 1e6 (Stability.DavisNearItsLimits, first GPU run).
-        float a = p.x;
-        float lb = log1pSafe(tau / a);
-        if (form == kFormSurfaceSurface) return exp(-a * lb);
-        if (form == kFormSurfaceMedium) return exp(-(a + 1.0f) * lb);
-        return (1.0f + 1.0f / a) * exp(-(a + 2.0f) * lb);
-    }
-    if (type == kTrDavisWeinstein) {
-        if (tau <= 0.0f) return form == kFormMediumMedium ? 0.0f : 1.0f;
-        vec3 d = trDavisWeinsteinTerms(tau, p);
-        if (form == kFormSurfaceSurface) return d.x;
-        if (form == kFormSurfaceMedium) return d.y;
-        return d.z;
-    }
-    if (type == kTrPulse) {
-        if (form == kFormSurfaceSurface) return trPulseG(tau, p);
-        if (form == kFormSurfaceMedium) {
-            float n = p.z;
-            float x = clamp(floor(n * (tau - p.x) / (p.y - p.x) + 0.5f), 0.0f, n);
-            return 1.0f - x / n;
-        }
-        return 0.0f;  // Dirac comb
-    }
+    if (type == kTrLinear) return trLinearForm(p, form, tau);
+    if (type == kTrQuadratic) return trQuadraticForm(p, form, tau);
+    if (type == kTrDoubleExponential) return trDoubleExponentialForm(p, form, tau);
+    if (type == kTrErlang) return trErlangForm(p, form, tau);
+    if (type == kTrDavis) return trDavisForm(p, form, tau);
+    if (type == kTrDavisWeinstein) return trDavisWeinsteinForm(p, form, tau);
+    if (type == kTrPulse) return trPulseForm(p, form, tau);
     return exp(-tau);  // exponential: every form
 }
 
