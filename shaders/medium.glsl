@@ -79,8 +79,9 @@ vec3 gridEmissionAt(uint mi, vec3 p) {
 // trForm and trForm3 with the model every medium of the scene shares (kSceneTrModel) called by
 // name: conditions on the constant alone, which the host's optimizer removes with everything they
 // guard (trForm's dispatch on its argument reached lavapipe whole, at each of the estimators'
-// calls: pipeline creation on the absorbing slab with debiased marching took 1.73 s, 0.4 s after;
-// docs/BENCHMARKS.md). Scenes whose media differ keep trForm's dispatch.
+// calls). With the estimator's dispatch below, pipeline creation of the media scenes went from
+// 2.2-2.9 s to 0.2-0.5 s (docs/BENCHMARKS.md "Media pipelines"). Scenes whose media differ keep
+// trForm's dispatch.
 float mediumForm(TrModel m, uint form, float tau) {
     if (kSceneTrModel == kTrExponential) return exp(-max(tau, 0.0));
     if (kSceneTrModel == kTrLinear) return trLinearForm(m.a, form, max(tau, 0.0));
@@ -262,7 +263,7 @@ vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, 
                         kTaylorExact);
     // trEstimate's dispatch, on the specialisation constant itself: trEstimate reads the type from
     // its argument, which the host's optimizer cannot fold, so every estimator reached lavapipe and
-    // was optimised there before it was dropped (about 1.5 s of pipeline creation on the slab).
+    // was optimised there before it was dropped (mediumForm above says what it cost).
     TrModel model = mediumModel(mi);
     uint form = trFormOf(startOnSurface, endOnSurface);
     if (!(s.len > 0.0)) return vec3(mediumForm(model, form, 0.0));
