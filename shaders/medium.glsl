@@ -79,9 +79,9 @@ vec3 gridEmissionAt(uint mi, vec3 p) {
 // trForm and trForm3 with the model every medium of the scene shares (kSceneTrModel) called by
 // name: conditions on the constant alone, which the host's optimizer removes with everything they
 // guard (trForm's dispatch on its argument reached lavapipe whole, at each of the estimators'
-// calls). With the estimator's dispatch below, pipeline creation of the media scenes went from
-// 2.2-2.9 s to 0.2-0.5 s (docs/BENCHMARKS.md "Media pipelines"). Scenes whose media differ keep
-// trForm's dispatch.
+// calls). With trEstimate's dispatch on kTrEstimatorType (TR_ESTIMATOR_TYPE below), pipeline
+// creation of the media scenes went from 2.2-2.9 s to 0.2-0.5 s (docs/BENCHMARKS.md "Media
+// pipelines"). Scenes whose media differ keep trForm's dispatch, as does a model missing here.
 float mediumForm(TrModel m, uint form, float tau) {
     if (kSceneTrModel == kTrExponential) return exp(-max(tau, 0.0));
     if (kSceneTrModel == kTrLinear) return trLinearForm(m.a, form, max(tau, 0.0));
@@ -103,6 +103,7 @@ vec3 mediumForm3(TrModel m, uint form, vec3 tau) {
 #define TR_FORM mediumForm
 #define TR_GRID_DENSITY(s, t) gridDensityAt((s).medium, (s).origin + (s).dir * (t))
 #define TR_TAYLOR_OUTSIDE_DISPATCH  // mediumTransmittance calls trTaylor under kTrEstimatorType alone
+#define TR_ESTIMATOR_TYPE(e) kTrEstimatorType  // trEstimate keeps only the scene's estimator
 #include "shared/transmittance_estimators.h"
 #include "shared/free_flight.h"
 
@@ -249,10 +250,10 @@ const bool kGridTracking = kHasGrids && (kTrEstimatorType == kTrEstDeltaTracking
 vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, bool endOnSurface, inout Rng rng) {
     if (kCombExactEverywhere)
         return mediumForm3(mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
-                       sceneMedium(mi).sigmaT * (sceneMedium(mi).density * max(l, 0.0)));
+                           sceneMedium(mi).sigmaT * (sceneMedium(mi).density * max(l, 0.0)));
     if (kCombEstimator && sceneMedium(mi).type == kMediumHomogeneous)
         return mediumForm3(mediumModel(mi), trFormOf(startOnSurface, endOnSurface),
-                       sceneMedium(mi).sigmaT * (sceneMedium(mi).density * max(l, 0.0)));
+                           sceneMedium(mi).sigmaT * (sceneMedium(mi).density * max(l, 0.0)));
     uint lookups = 0u;
     TrSegment s = mediumSegment(mi, o, d, l);
     if (kGridTracking) {
@@ -261,17 +262,7 @@ vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, 
     if (kTrEstimatorType == kTrEstTaylor)
         return trTaylor(sceneTrEstimator(), mediumModel(mi), trFormOf(startOnSurface, endOnSurface), s, rng, lookups,
                         kTaylorExact);
-    // trEstimate's dispatch, on the specialisation constant itself: trEstimate reads the type from
-    // its argument, which the host's optimizer cannot fold, so every estimator reached lavapipe and
-    // was optimised there before it was dropped (mediumForm above says what it cost).
-    TrModel model = mediumModel(mi);
-    uint form = trFormOf(startOnSurface, endOnSurface);
-    if (!(s.len > 0.0)) return vec3(mediumForm(model, form, 0.0));
-    if (kTrEstimatorType == kTrEstRayMarch) return trRayMarch(kTrLevel, model, form, s, rng, lookups);
-    if (kTrEstimatorType == kTrEstDebiasedRayMarch)
-        return trDebiasedRayMarch(sceneTrEstimator(), model, form, s, rng, lookups);
-    if (kTrEstimatorType == kTrEstUnbiasedRayMarch) return trUnbiasedRayMarch(s, rng, lookups);
-    return trTrack(kTrEstimatorType, s, rng, lookups);
+    return trEstimate(sceneTrEstimator(), mediumModel(mi), trFormOf(startOnSurface, endOnSurface), s, rng, lookups);
 }
 
 // ---- Medium boundaries ----

@@ -34,6 +34,12 @@ SHADER_NAMESPACE_BEGIN
 #ifndef TR_FORM
 #define TR_FORM trForm
 #endif
+// The estimator trEstimate runs: its argument's type, unless the includer names a constant
+// (medium.glsl: kTrEstimatorType, so that the host's optimizer drops the other estimators before
+// lavapipe optimises them; the transmittance study sweeps them at run time).
+#ifndef TR_ESTIMATOR_TYPE
+#define TR_ESTIMATOR_TYPE(e) (e).type
+#endif
 
 // Largest comb of debiased marching: 2^kTrMaxCombLog2 points; deeper levels are marched at this
 // size (a truncation of the telescope). Why a cap at all: (1) in single precision the correction's
@@ -408,13 +414,13 @@ FN vec3 trTaylor(TrEstimator e, TrModel m, uint form, TrSegment s, INOUT(Rng) rn
 // ---- Dispatch over the estimators ----
 FN vec3 trEstimate(TrEstimator e, TrModel m, uint form, TrSegment s, INOUT(Rng) rng, INOUT(uint) lookups) {
     if (!(s.len > 0.0f)) return vec3(TR_FORM(m, form, 0.0f));
-    if (e.type == kTrEstRayMarch) return trRayMarch(e.level, m, form, s, rng, lookups);
-    if (e.type == kTrEstDebiasedRayMarch) return trDebiasedRayMarch(e, m, form, s, rng, lookups);
-    if (e.type == kTrEstUnbiasedRayMarch) return trUnbiasedRayMarch(s, rng, lookups);
+    if (TR_ESTIMATOR_TYPE(e) == kTrEstRayMarch) return trRayMarch(e.level, m, form, s, rng, lookups);
+    if (TR_ESTIMATOR_TYPE(e) == kTrEstDebiasedRayMarch) return trDebiasedRayMarch(e, m, form, s, rng, lookups);
+    if (TR_ESTIMATOR_TYPE(e) == kTrEstUnbiasedRayMarch) return trUnbiasedRayMarch(s, rng, lookups);
 #ifndef TR_TAYLOR_OUTSIDE_DISPATCH
-    if (e.type == kTrEstTaylor) return trTaylor(e, m, form, s, rng, lookups, kTaylorExact);
+    if (TR_ESTIMATOR_TYPE(e) == kTrEstTaylor) return trTaylor(e, m, form, s, rng, lookups, kTaylorExact);
 #endif
-    return trTrack(e.type, s, rng, lookups);
+    return trTrack(TR_ESTIMATOR_TYPE(e), s, rng, lookups);
 }
 
 SHADER_NAMESPACE_END

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 
 #include <fmt/format.h>
@@ -184,23 +185,15 @@ GpuScene buildGpuScene(const Scene& scene) {
     }
     // Photon mapping stores photons on both sides of a rough dielectric and of a composite that may
     // resolve to one (the store comes before the composite's draw: photon_trace.comp). Composites
-    // nest (mixed of mixed), so the flag spreads until nothing changes.
-    for (size_t i = 0; i < scene.materials.size(); ++i)
-        if (scene.materials[i].type == BsdfType::RoughDielectric) out.materials[i].flags |= shader::kMaterialBothSides;
-    for (bool changed = true; changed;) {
-        changed = false;
-        for (size_t i = 0; i < scene.materials.size(); ++i) {
-            const Material& m = scene.materials[i];
-            const bool composite = m.type == BsdfType::Mixed || m.type == BsdfType::Transparency;
-            const int components = m.type == BsdfType::Mixed ? 2 : 1;
-            if (!composite || (out.materials[i].flags & shader::kMaterialBothSides) != 0u) continue;
-            for (int c = 0; c < components; ++c)
-                if ((out.materials[m.component[c]].flags & shader::kMaterialBothSides) != 0u) {
-                    out.materials[i].flags |= shader::kMaterialBothSides;
-                    changed = true;
-                }
-        }
-    }
+    // nest at most kMaxMaterialNesting deep and never contain themselves (the reader's rules).
+    const std::function<bool(uint32_t)> mayTransmit = [&](uint32_t i) {
+        const Material& m = scene.materials[i];
+        if (m.type == BsdfType::Mixed) return mayTransmit(m.component[0]) || mayTransmit(m.component[1]);
+        if (m.type == BsdfType::Transparency) return mayTransmit(m.component[0]);
+        return m.type == BsdfType::RoughDielectric;
+    };
+    for (uint32_t i = 0; i < scene.materials.size(); ++i)
+        if (mayTransmit(i)) out.materials[i].flags |= shader::kMaterialBothSides;
     if (out.materials.empty()) out.materials.push_back({});  // keep the buffer non-empty
 
     // ---- BVH over the geometry; prims are stored in leaf order ----
