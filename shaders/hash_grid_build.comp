@@ -167,15 +167,21 @@ void main() {
         }
     } else if (kStage == kGridStageScatter) {
         PhotonArrayRef sorted = PhotonArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
+        // Under Tungsten's cap photon_trace divided the powers by the paths it might trace; the
+        // copy in bucket order carries them per path traced (powerPaths 0: nothing to rescale).
+        bool rescale = map.h.powerPaths != 0u && map.h.tracedPaths != 0u;
+        float scale = rescale ? float(map.h.powerPaths) / float(map.h.tracedPaths) : 1.0;
         for (uint i = id; i < stored; i += threadCount()) {
             if (kSortedTexels) {
                 uvec4 a = texelFetch(photonTexels, int(2u * i)), b = texelFetch(photonTexels, int(2u * i + 1u));
                 uint h = gridHash(gridCell(uintBitsToFloat(a.xyz), map.h.cellSize), map.h.tableSize);
                 int slot = int(atomicAdd(cellStart.v[h], 1u));
+                if (rescale) b.xyz = floatBitsToUint(uintBitsToFloat(b.xyz) * scale);
                 imageStore(sortedImage, 2 * slot, a);
                 imageStore(sortedImage, 2 * slot + 1, b);
             } else {
                 Photon ph = photons.p[i];
+                if (rescale) ph.power *= scale;
                 sorted.p[atomicAdd(cellStart.v[gridHash(gridCell(ph.position, map.h.cellSize), map.h.tableSize)], 1u)] = ph;
             }
         }

@@ -10,6 +10,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #define TELESCOPE_INT64  // shared/sampling.h: curvePosition
 
@@ -33,11 +34,22 @@ layout(push_constant) uniform Push { PhotonTracePush pc; };
 // stores land near each other and the hash grid's count and scatter touch nearby buckets and
 // memory (docs/BENCHMARKS.photon-notes.md), where independent directions made every access random.
 //
-// Emission: origin, direction and power of a photon leaving a light picked by power.
-void emitPhoton(uint path, inout Rng rng, out vec3 origin, out vec3 dir, out vec3 power) {
+// Under Tungsten's cap (PhotonTracePush) a pass traces a number of rounds that depends on what
+// the earlier rounds stored, so the rounds traced must cover the curve evenly whatever their
+// number: lane l owns 2^roundBits consecutive stretches and round r takes the one at
+// bitfieldReverse(r) (van der Corput's order), so every round spreads over the whole curve and the
+// rounds traced fill each lane's stretches evenly; the pass shifts the curve by a uniform
+// curveShift, which keeps every path's T uniform on its own (each path's photons unbiased) while
+// consecutive lanes still leave side by side. (Rounds that took whole segments of the curve
+// each lit the scene from a part of the light only: 4.7 times the standard deviation of the
+// image, measured on the water pool.)
+//
+// Emission: origin, direction and power of a photon leaving a light picked by power; stratum of
+// strata: the path's stretch of the curve.
+void emitPhoton(uint stratum, uint strata, inout Rng rng, out vec3 origin, out vec3 dir, out vec3 power) {
     uint li = pickLight(rngNext(rng));
     LightGpu light = sceneLight(li);
-    uint t = curvePosition(path, pc.pathCount, rngNextUint(rng));
+    uint t = curvePosition(stratum, strata, rngNextUint(rng)) + pc.curveShift;
     float u1, u2, u3 = 0.0, u4 = 0.0;
     if (light.type == kLightPoint) {
         u1 = (float(curveCoordinate2(t, 0u)) + rngNext(rng)) * (1.0 / 65536.0);
@@ -104,27 +116,30 @@ void emitPhoton(uint path, inout Rng rng, out vec3 origin, out vec3 dir, out vec
 // The lanes of a subgroup that store at this vertex take consecutive slots reserved by ONE atomic on
 // the shared counter, not one atomic per photon: on lavapipe the counter's cache line moves between
 // the cores at every atomic; the stores were a third to a half of this pass (docs/BENCHMARKS.photon-notes.md).
-void storePhoton(PhotonMapRef map, PhotonArrayRef photons, uint capacity, vec3 p, vec3 wi, vec3 power, uint vertex) {
+// Capped passes: the subgroup whose photons reach storeCap marks the round (cappedAtRound).
+void storePhoton(PhotonMapRef map, PhotonArrayRef photons, uint capacity, vec3 p, vec3 wi, vec3 power, uint vertex,
+                 uint round) {
     uvec4 lanes = subgroupBallot(true);
     uint first = 0u;
-    if (subgroupElect()) first = atomicAdd(map.h.storedCount, subgroupBallotBitCount(lanes));
+    if (subgroupElect()) {
+        uint n = subgroupBallotBitCount(lanes);
+        first = atomicAdd(map.h.storedCount, n);
+        if (first + n >= pc.storeCap) atomicMin(map.h.cappedAtRound, round);
+    }
     uint slot = subgroupBroadcastFirst(first) + subgroupBallotExclusiveBitCount(lanes);
     if (slot >= capacity) return;  // counted: the host grows the buffer and repeats the pass
     photons.p[slot] = Photon(p, vertex, power, encodeDirection(wi));
 }
 
-void tracePhotonPath() {
-    uint path = gl_GlobalInvocationID.y * pc.rowThreads + gl_GlobalInvocationID.x;
-    if (path >= pc.pathCount || kLightCount == 0u) return;
-    PhotonMapRef map = PhotonMapRef(uvec2(pc.headerLo, pc.headerHi));
-    PhotonArrayRef photons = PhotonArrayRef(uvec2(map.h.photonsLo, map.h.photonsHi));
-    uint capacity = map.h.capacity;
+// Path `path` of the pass (in round `round`) from the curve's stretch `stratum` of `strata`.
+void tracePhotonPath(PhotonMapRef map, PhotonArrayRef photons, uint capacity, uint path, uint stratum, uint strata,
+                     uint round) {
     uint seed = pc.seed ^ 0x5bd1e995u;
     if (pc.passInBlock != 0u) seed ^= pcgHash(pc.passInBlock);  // the passes of a block differ
     Rng rng = rngCreate(path, pc.pass, seed);
 
     vec3 origin, dir, power;
-    emitPhoton(path, rng, origin, dir, power);
+    emitPhoton(stratum, strata, rng, origin, dir, power);
     if (!any(greaterThan(power, vec3(0.0)))) return;
     // Direct light until the photon scatters: straight passes (transparency, a thin sheet's
     // transmission) keep it direct, since next-event shadow rays pass those surfaces too.
@@ -149,7 +164,7 @@ void tracePhotonPath() {
                         (kBsdfFamilies != 0u && (isGlossyBsdf(m.type) || m.type == kBsdfMixed || m.type == kBsdfTransparency));
         bool bothSides = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && (m.flags & kMaterialBothSides) != 0u;
         if (nonDelta && (front || kTwoSided || bothSides) && (!kNextEvent || !direct))
-            storePhoton(map, photons, capacity, p, -dir, power, v);
+            storePhoton(map, photons, capacity, p, -dir, power, v, round);
 
         // ---- Scatter ----
         if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
@@ -209,8 +224,34 @@ void tracePhotonPath() {
 
 #include "loop_cap.glsl"
 
+// The lane's paths of this dispatch's rounds (PhotonTracePush), and the paths it traced into the
+// header's tracedPaths (one atomic per subgroup). Capped: one round per dispatch, traced only if
+// no earlier round filled the budget (cappedAtRound, final once the earlier dispatches are done:
+// the round's own stores only write values equal to its index).
+void traceLane() {
+    uint lane = gl_GlobalInvocationID.y * pc.rowThreads + gl_GlobalInvocationID.x;
+    if (lane >= pc.laneCount || kLightCount == 0u) return;
+    PhotonMapRef map = PhotonMapRef(uvec2(pc.headerLo, pc.headerHi));
+    bool capped = pc.storeCap != 0xffffffffu;
+    if (capped && map.h.cappedAtRound < pc.roundBegin) return;
+    PhotonArrayRef photons = PhotonArrayRef(uvec2(map.h.photonsLo, map.h.photonsHi));
+    uint capacity = map.h.capacity;
+    uint traced = 0u;
+    for (uint r = pc.roundBegin; r < pc.roundEnd; ++r) {
+        uint path = r * pc.laneCount + lane;
+        if (path >= pc.pathCount) break;
+        uint place = pc.roundBits == 0u ? 0u : bitfieldReverse(r) >> (32u - pc.roundBits);
+        uint stratum = capped ? (lane << pc.roundBits) + place : path;
+        uint strata = capped ? pc.laneCount << pc.roundBits : pc.pathCount;
+        tracePhotonPath(map, photons, capacity, path, stratum, strata, r);
+        ++traced;
+    }
+    uint total = subgroupAdd(traced);
+    if (subgroupElect() && total != 0u) atomicAdd(map.h.tracedPaths, total);
+}
+
 void main() {
-    tracePhotonPath();
+    traceLane();
     // lanes whose loops lavapipe's cap may have ended: the host reports them (an error)
     if (loopCapReached(2u + (pc.pathCount >> 31u)))
         atomicAdd(PhotonMapRef(uvec2(pc.headerLo, pc.headerHi)).h.loopCapHits, 1u);

@@ -295,8 +295,14 @@ TEST_F(PhotonRender, SixteenMillionPhotons) {
     Film film = renderer.film();
     const std::vector<double> want = analyticRegions();
     auto regions = blockMeans(film, kBlock);
-    // The centre regions: the biased estimate at r = 0.02 is within a few percent.
-    for (size_t r : {5, 6, 9, 10}) EXPECT_NEAR(regions[r].mean.x, want[r], 0.03 * want[r]) << "region " << r;
+    // The centre (regions 5, 6, 9, 10: 8x8 pixels): the biased estimate at r = 0.02 is within 2%.
+    // (One pixel, one gather point each: a single region of 4x4 is 2-3% off in some seeds.)
+    double got = 0.0, expected = 0.0;
+    for (size_t r : {5, 6, 9, 10}) {
+        got += regions[r].mean.x / 4.0;
+        expected += want[r] / 4.0;
+    }
+    EXPECT_NEAR(got, expected, 0.02 * expected);
 }
 
 TEST_F(PhotonRender, CausticCornellBoxAgreesWithThePathTracer) {
@@ -379,10 +385,12 @@ TEST_F(PhotonRender, PhotonsReadByAddressGiveTheSameFilm) {
     // grows past the limit). With the limit lowered to the first pass's capacity, the photon map
     // outgrows it in the first pass (the caustic Cornell box stores more photons than it emits
     // paths), so the gather must switch; the film must equal the one read through texels, but for
-    // the order in which the scatter's atomics leave each bucket's photons (float rounding).
+    // the order in which the scatter's atomics leave each bucket's photons (float rounding). The
+    // unbiased estimator (its blocks cut to one pass at level 0) keeps every photon of its paths;
+    // biased photon mapping would stop near photon_count photons (docs/PHOTON-MAPPING.md).
     const uint32_t paths = 20000;
     Scene scene = loadTestScene("scenes/cornell-box-caustic.json", {{"camera.resolution", "[32,32]"},
-                                                                    {"integrator.debias", "null"},
+                                                                    {"integrator.debias.level_cap", "1"},
                                                                     {"integrator.direct_lighting", R"("photons")"},
                                                                     {"integrator.photon_count", std::to_string(paths)},
                                                                     {"integrator.gather_radius", "0.05"}});

@@ -326,25 +326,44 @@ struct Photon {
 // the fields every photon store reads (capacity, addresses), each atomic on one core made the
 // other core's next read of those fields a miss (lavapipe; the header is 128 bytes for that).
 struct PhotonMapHeader {
-    uint capacity; uint tableSize; float cellSize; uint pad0;
+    uint capacity; uint tableSize; float cellSize;
+    uint powerPaths;  // the paths the stored powers were divided by when fewer were traced (Tungsten's cap), else 0
+
     uint photonsLo; uint photonsHi; uint sortedLo; uint sortedHi;  // photons as stored, and in bucket order
     uint cellCountLo; uint cellCountHi; uint cellStartLo; uint cellStartHi;
     uint pad1; uint pad2; uint pad3; uint pad4;
-    uint storedCount; uint maxBucket; uint loopCapHits; uint pad6;  // written by atomics: a cache line of their own
-    uint pad7; uint pad8; uint pad9; uint pad10;
+    uint storedCount; uint maxBucket; uint loopCapHits;  // written by atomics: a cache line of their own
+    uint tracedPaths;  // photon paths traced this pass (photon_trace counts them)
+    uint cappedAtRound;  // capped passes: the first round whose photons reached storeCap (~0u: none yet)
+    uint pad8; uint pad9; uint pad10;
     uint pad11; uint pad12; uint pad13; uint pad14;
     uint pad15; uint pad16; uint pad17; uint pad18;
 };
 
+// Rounds of a pass under Tungsten's photon_count cap, at most (render/photon_passes.cpp,
+// photonBudget); a round has at least kPhotonCapRoundPaths paths.
+CONST uint kPhotonCapRounds = 64u;
+CONST uint kPhotonCapRoundPaths = 1024u;
+
+// One photon_trace dispatch: lane l (one thread) traces the paths round * laneCount + l of rounds
+// roundBegin .. roundEnd - 1 that are below pathCount. Uncapped (storeCap ~0u): one round of
+// pathCount lanes, path i in stretch i of pathCount of the emission curve. Capped (Tungsten's
+// photon_count: render/photon_passes.cpp "Photon budget"): one round per dispatch, traced only
+// while the earlier rounds stored fewer than storeCap photons; lane l's path of round r takes the
+// stretch l 2^roundBits + bitfieldReverse(r) (roundBits bits) of the curve, shifted by curveShift.
 struct PhotonTracePush {
     uint headerLo; uint headerHi;
-    uint pathCount;   // photon paths emitted this pass
+    uint pathCount;   // photon paths this pass may trace (photon_count)
     uint pass;        // pass index (the sample index of the render)
     uint seed;
     float pathScale;  // 1 / pathCount
-    uint rowThreads;  // threads per row of the 2D dispatch: path = y * rowThreads + x
+    uint rowThreads;  // threads per row of the 2D dispatch: lane = y * rowThreads + x
     uint passInBlock; // pass within the block (unbiased photon mapping), else 0
     vec3 sceneCentre; float sceneRadius;  // a sphere around the geometry: lights at infinity emit through its disk
+    uint laneCount; uint roundBegin; uint roundEnd; uint roundBits;
+    uint storeCap;    // capped: photons after which no further round starts; ~0u: uncapped
+    uint curveShift;  // capped: a uniform shift of the emission curve, drawn per pass
+    uint pad0; uint pad1;
 };
 
 struct HashGridPush {
@@ -389,7 +408,7 @@ SHADER_NAMESPACE_END
 #ifdef __cplusplus
 static_assert(sizeof(telescope::shader::Photon) == 32);
 static_assert(sizeof(telescope::shader::PhotonMapHeader) == 128);
-static_assert(sizeof(telescope::shader::PhotonTracePush) == 48);
+static_assert(sizeof(telescope::shader::PhotonTracePush) == 80);
 static_assert(sizeof(telescope::shader::HashGridPush) == 64);
 static_assert(sizeof(telescope::shader::GatherPush) == 128);
 #endif

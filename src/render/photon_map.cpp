@@ -114,10 +114,12 @@ void PhotonMap::shrinkTo(uint64_t photons) {
     if (photons * 3 < capacity_ * 2) allocate(std::max<uint64_t>(photons, 1));
 }
 
-void PhotonMap::beginPass(float cellSize) {
+void PhotonMap::beginPass(float cellSize, uint32_t powerPaths) {
     cellSize_ = cellSize;
     shader::PhotonMapHeader h{};
     h.storedCount = 0;
+    h.powerPaths = powerPaths;
+    h.cappedAtRound = 0xffffffffu;
     h.capacity = uint32_t(capacity_);
     h.tableSize = tableSize_;
     h.cellSize = cellSize;

@@ -42,8 +42,9 @@ public:
     void reserve(uint64_t photons);
     // Reallocates for `photons` photons when the capacity is over 1.5 times that (contents lost).
     void shrinkTo(uint64_t photons);
-    // Writes the header for the next pass: no photons stored, the given cell size.
-    void beginPass(float cellSize);
+    // Writes the header for the next pass: no photons stored, the given cell size. powerPaths: the
+    // paths photon_trace divides the powers by when it may trace fewer (0: exactly that many).
+    void beginPass(float cellSize, uint32_t powerPaths = 0);
     // Photons the last pass tried to store (more than capacity() when it overflowed).
     uint64_t storedCount() const;
     // Photons in the fullest bucket of the last build (the scan records it).

@@ -61,6 +61,37 @@ uint32_t uniformBlockLevel(const DebiasSettings& d, uint64_t block, uint32_t see
     return shader::photonLevelSample(photonLevels(d), u1, u2);
 }
 
+// ---- Photon budget ----
+// Tungsten's photon_count caps both the paths of a pass and the photons it stores: its threads
+// trace paths until their share of the photon buffer is full, and the powers are divided by the
+// paths traced. Biased and progressive photon mapping keep that meaning, in rounds: round r traces
+// the paths r * lanes ... (r + 1) * lanes - 1 (below photon_count), and a round starts only while
+// the earlier rounds stored fewer than photon_count photons. The paths traced, their photons and
+// the image then depend on the seed alone, and the pass stores photon_count photons plus part of
+// one round (at most 1/64 of photon_count paths' photons). The stop depends on what the earlier
+// rounds stored, which makes the pass a ratio whose bias is of the order of 1 / paths (Tungsten's
+// has the same); unbiased photon mapping traces photon_count paths and keeps every photon.
+struct PhotonBudget {
+    bool capped = false;
+    uint32_t lanes = 0, rounds = 1, roundBits = 0;
+};
+
+PhotonBudget photonBudget(const IntegratorSettings& in) {
+    PhotonBudget b;
+    const uint32_t n = in.photon.photonCount;
+    if (unbiased(in)) {
+        b.lanes = n;
+        return b;
+    }
+    b.capped = true;
+    // At most 64 rounds (a dispatch each) of at least 1024 paths.
+    b.rounds = std::clamp<uint32_t>(n / shader::kPhotonCapRoundPaths, 1u, shader::kPhotonCapRounds);
+    b.lanes = (n + b.rounds - 1) / b.rounds;
+    b.rounds = (n + b.lanes - 1) / b.lanes;
+    while ((1u << b.roundBits) < b.rounds) ++b.roundBits;
+    return b;
+}
+
 }  // namespace
 
 uint32_t photonBlockLevel(const DebiasSettings& debias, uint64_t block, uint32_t seed) {
@@ -74,10 +105,17 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
     const PhotonSettings& ph = in.photon;
     const bool nee = ph.directLighting == DirectLighting::NextEvent;
 
-    plan.passes.push_back(plannedPass(PassKind::PhotonTrace,
-                           fmt::format("{} photon paths per pass from the lights (picked by power), stored at diffuse "
-                                       "hits{} in one photon buffer (grown, never truncated)",
-                                       ph.photonCount, nee ? " after the first bounce" : "")));
+    const PhotonBudget budget = photonBudget(in);
+    plan.passes.push_back(plannedPass(
+        PassKind::PhotonTrace,
+        budget.capped
+            ? fmt::format("photon paths from the lights (picked by power), stored at diffuse hits{} in one photon "
+                          "buffer, in rounds of {} paths until {} photons are stored or {} paths traced (Tungsten's "
+                          "photon_count); powers divided by the paths traced",
+                          nee ? " after the first bounce" : "", budget.lanes, ph.photonCount, ph.photonCount)
+            : fmt::format("{} photon paths per pass from the lights (picked by power), stored at diffuse hits{} in "
+                          "one photon buffer (grown, never truncated: the unbiased blocks keep every photon)",
+                          ph.photonCount, nee ? " after the first bounce" : "")));
     plan.passes.push_back(plannedPass(PassKind::HashGridBuild,
                            "count photons per hash bucket, exclusive prefix sum, scatter; cell size = the largest "
                            "gather diameter of the pass"));
@@ -189,7 +227,9 @@ public:
         : integrator_(scene.integrator),
           camera_(scene.camera),
           seed_(seed),
-          map_(context, scene.integrator.photon.photonCount),
+          budget_(photonBudget(scene.integrator)),
+          // a capped pass stores up to one path per lane beyond photon_count
+          map_(context, uint64_t(scene.integrator.photon.photonCount) * (budget_.capped ? 9 : 8) / 8),
           gatherShader_(plannedEntry(plan, PassKind::Gather).shader),
           gatherSpec_(deviceSceneSpec(context, plan.photonSpec, b, false)),
           pipelines_(gpu::createComputePipelines(
@@ -214,6 +254,9 @@ public:
         tracePush_.pathScale = 1.0f / float(paths);
         tracePush_.sceneCentre = plan.photonSceneCentre;
         tracePush_.sceneRadius = plan.photonSceneRadius;
+        tracePush_.laneCount = budget_.lanes;
+        tracePush_.roundBits = budget_.roundBits;
+        tracePush_.storeCap = budget_.capped ? paths : 0xffffffffu;
         setPushCamera(gatherPush_, cam);
         gatherPush_.width = cam.width;
         gatherPush_.height = cam.height;
@@ -238,7 +281,9 @@ public:
 
     uint32_t samplesPerUnit() const override { return 1; }
     uint32_t maxUnitsPerBatch() const override { return 1; }
-    uint32_t dispatchesPerUnit() const override { return 16 + slices_; }
+    uint32_t dispatchesPerUnit() const override {
+        return 15 + budget_.rounds + slices_;
+    }
     bool sampleInProgress() const override { return blocks() && passInBlock_ != 0; }
 
     // One photon pass. Returns the samples per pixel it completes: 1, or under the uniform
@@ -251,18 +296,26 @@ public:
             block_.passes = shader::photonBlockPasses(photonLevels(in.debias), block_.level);
         }
         const double radius = baseRadius(in, sampleBase);
-        map_.beginPass(float(2.0 * radius));
+        map_.beginPass(float(2.0 * radius), budget_.capped ? tracePush_.pathCount : 0u);
         const VkDeviceAddress header = map_.headerAddress();
 
         tracePush_.headerLo = uint32_t(header);
         tracePush_.headerHi = uint32_t(header >> 32);
         tracePush_.pass = uint32_t(sampleBase);
         tracePush_.passInBlock = passInBlock_;
-        const uint32_t traceGroups = (tracePush_.pathCount + shader::kPhotonTraceGroupSize - 1) / shader::kPhotonTraceGroupSize;
-        // 2D when the paths need more workgroups than one dimension allows.
+        if (budget_.capped) {
+            shader::Rng rng = shader::rngCreate(0x2c1b3c6du, uint32_t(sampleBase), seed_ ^ 0x297a2d39u);
+            tracePush_.curveShift = shader::rngNextUint(rng);
+        }
+        const uint32_t traceGroups = (budget_.lanes + shader::kPhotonTraceGroupSize - 1) / shader::kPhotonTraceGroupSize;
+        // 2D when the lanes need more workgroups than one dimension allows.
         const uint32_t gx = std::min<uint32_t>(traceGroups, 32768), gy = (traceGroups + gx - 1) / gx;
         tracePush_.rowThreads = gx * shader::kPhotonTraceGroupSize;
-        batch.dispatch(trace_, &tracePush_, sizeof(tracePush_), gx, gy, 1, passName(PassKind::PhotonTrace));
+        for (uint32_t r = 0; r < budget_.rounds; ++r) {
+            tracePush_.roundBegin = r;
+            tracePush_.roundEnd = r + 1;
+            batch.dispatch(trace_, &tracePush_, sizeof(tracePush_), gx, gy, 1, passName(PassKind::PhotonTrace));
+        }
 
         map_.recordBuild(batch);
         if (gatherBinds_ != map_.generation()) bindGather();  // the photon map was reallocated
@@ -289,6 +342,7 @@ public:
         const uint32_t fullest = header.maxBucket;
         loopCapHits_ += header.loopCapHits;  // photon_trace and gather of this pass (the header is per pass)
         lastStored_ = stored;
+        lastTraced_ = header.tracedPaths;
         const uint32_t slicesNeeded = PhotonMap::slicesFor(fullest, integrator_.photon.gatherCount);
         if (stored > map_.capacity() || slicesNeeded > slices_) {
             // The gather skipped its accumulation: grow what was short and repeat the pass. A map
@@ -352,7 +406,7 @@ public:
     }
     void countBatch(IntegratorCounters& c, uint32_t units) const override {
         // One unit (a photon pass) per batch (maxUnitsPerBatch).
-        c.photonPaths += tracePush_.pathCount;
+        c.photonPaths += lastTraced_;
         c.photonPasses += units;
         c.photonsStored += lastStored_;
         c.photonMapBytes = map_.deviceBytes() + blockBuffer_.size();
@@ -362,6 +416,9 @@ public:
         map_.recordWarmUp(batch);
         shader::PhotonTracePush t = tracePush_;
         t.pathCount = 0;
+        t.laneCount = 0;
+        t.roundBegin = 0;
+        t.roundEnd = 1;
         t.headerLo = uint32_t(map_.headerAddress());
         t.headerHi = uint32_t(map_.headerAddress() >> 32);
         batch.dispatch(trace_, &t, sizeof(t), 1, 1, 1, "warm-up");
@@ -413,6 +470,7 @@ private:
     IntegratorSettings integrator_;
     Camera camera_;  // resolution only (the gather's dispatch size)
     uint32_t seed_;
+    PhotonBudget budget_;
     PhotonMap map_;
     std::string gatherShader_;  // the plan's gather entry's shader
     std::vector<gpu::SpecConstant> gatherSpec_;  // but kSpecSortedTexels
@@ -426,6 +484,7 @@ private:
     shader::PhotonTracePush tracePush_{};
     shader::GatherPush gatherPush_{};
     uint64_t lastStored_ = 0;
+    uint64_t lastTraced_ = 0;
     uint64_t loopCapHits_ = 0;  // lanes of photon_trace and gather that reached lavapipe's loop cap (an error)
     uint32_t passInBlock_ = 0;
     uint32_t slices_ = 1;
