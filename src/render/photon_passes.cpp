@@ -296,8 +296,15 @@ public:
             block_.passes = shader::photonBlockPasses(photonLevels(in.debias), block_.level);
         }
         const double radius = baseRadius(in, sampleBase);
-        map_.beginPass(float(2.0 * radius), budget_.capped ? tracePush_.pathCount : 0u);
         const VkDeviceAddress header = map_.headerAddress();
+        if (gatherOnly_) {
+            // The photon map of the last attempt is whole; only its gather lacked slices
+            gatherOnly_ = false;
+            recordGather(batch, sampleBase, radius, header);
+            return blocks() && passInBlock_ + 1 < block_.passes ? 0 : 1;
+        }
+        map_.beginPass(float(2.0 * radius), budget_.capped ? tracePush_.pathCount : 0u);
+        countedCapHits_ = 0;
 
         tracePush_.headerLo = uint32_t(header);
         tracePush_.headerHi = uint32_t(header >> 32);
@@ -318,8 +325,13 @@ public:
         }
 
         map_.recordBuild(batch);
-        if (gatherBinds_ != map_.generation()) bindGather();  // the photon map was reallocated
+        recordGather(batch, sampleBase, radius, header);
+        return blocks() && passInBlock_ + 1 < block_.passes ? 0 : 1;
+    }
 
+    // The pass's gather in slices_ dispatches over the photon map at `header`.
+    void recordGather(gpu::CommandBatch& batch, uint64_t sampleBase, double radius, VkDeviceAddress header) {
+        if (gatherBinds_ != map_.generation()) bindGather();  // the photon map was reallocated
         gatherPush_.pass = uint32_t(sampleBase);
         gatherPush_.headerLo = uint32_t(header);
         gatherPush_.headerHi = uint32_t(header >> 32);
@@ -333,14 +345,16 @@ public:
             batch.dispatch(*pipelines_[1], &gatherPush_, sizeof(gatherPush_), (cam.width + 7) / 8, (cam.height + 7) / 8, 1,
                            passName(PassKind::Gather));
         }
-        return blocks() && passInBlock_ + 1 < block_.passes ? 0 : 1;
     }
 
     bool batchComplete(std::vector<gpu::DispatchTiming>& /*extra*/) override {
         const shader::PhotonMapHeader header = map_.header();  // one read for the three counts
         const uint64_t stored = header.storedCount;
         const uint32_t fullest = header.maxBucket;
-        loopCapHits_ += header.loopCapHits;  // photon_trace and gather of this pass (the header is per pass)
+        // photon_trace and gather of this pass (the header is per pass; a gather-only repeat adds to
+        // what the attempt before it counted)
+        loopCapHits_ += header.loopCapHits - countedCapHits_;
+        countedCapHits_ = header.loopCapHits;
         lastStored_ = stored;
         lastTraced_ = header.tracedPaths;
         const uint32_t slicesNeeded = PhotonMap::slicesFor(fullest, integrator_.photon.gatherCount);
@@ -351,8 +365,13 @@ public:
             // slices and traces the pass a third time: the water caustic's first pass did).
             const uint64_t kept = std::min<uint64_t>(stored, map_.capacity());
             const uint64_t expected = kept ? uint64_t(double(fullest) * double(stored) / double(kept)) : fullest;
+            // A map that kept every photon has its grid and its fullest bucket: only the gather
+            // runs again, with the slices that bucket needs (the water caustic's first pass: 7 s of
+            // photon_trace not traced twice).
+            gatherOnly_ = stored <= map_.capacity();
             if (stored > map_.capacity()) map_.reserve(stored + stored / 4);
-            const uint32_t full = uint32_t(std::min<uint64_t>(expected + expected / 4, UINT32_MAX));
+            const uint32_t full = gatherOnly_ ? fullest
+                                              : uint32_t(std::min<uint64_t>(expected + expected / 4, UINT32_MAX));
             slices_ = std::max(slices_, PhotonMap::slicesFor(full, integrator_.photon.gatherCount));
             return false;
         }
@@ -485,6 +504,8 @@ private:
     shader::GatherPush gatherPush_{};
     uint64_t lastStored_ = 0;
     uint64_t lastTraced_ = 0;
+    uint32_t countedCapHits_ = 0;  // the header's loop-cap hits batchComplete has counted this pass
+    bool gatherOnly_ = false;      // the next recordUnit repeats only the gather (more slices)
     uint64_t loopCapHits_ = 0;  // lanes of photon_trace and gather that reached lavapipe's loop cap (an error)
     uint32_t passInBlock_ = 0;
     uint32_t slices_ = 1;
