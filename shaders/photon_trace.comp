@@ -10,7 +10,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
-#extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #define TELESCOPE_INT64  // shared/sampling.h: curvePosition
 
@@ -118,22 +117,22 @@ void emitPhoton(uint stratum, uint strata, inout Rng rng, out vec3 origin, out v
 // the cores at every atomic; the stores were a third to a half of this pass (docs/BENCHMARKS.photon-notes.md).
 // Capped passes: the subgroup whose photons reach storeCap marks the round (cappedAtRound).
 void storePhoton(PhotonMapRef map, PhotonArrayRef photons, uint capacity, vec3 p, vec3 wi, vec3 power, uint vertex,
-                 uint round) {
+                 uint roundIndex) {
     uvec4 lanes = subgroupBallot(true);
     uint first = 0u;
     if (subgroupElect()) {
         uint n = subgroupBallotBitCount(lanes);
         first = atomicAdd(map.h.storedCount, n);
-        if (first + n >= pc.storeCap) atomicMin(map.h.cappedAtRound, round);
+        if (first + n >= pc.storeCap) atomicMin(map.h.cappedAtRound, roundIndex);
     }
     uint slot = subgroupBroadcastFirst(first) + subgroupBallotExclusiveBitCount(lanes);
     if (slot >= capacity) return;  // counted: the host grows the buffer and repeats the pass
     photons.p[slot] = Photon(p, vertex, power, encodeDirection(wi));
 }
 
-// Path `path` of the pass (in round `round`) from the curve's stretch `stratum` of `strata`.
+// Path `path` of the pass (in round roundIndex) from the curve's stretch `stratum` of `strata`.
 void tracePhotonPath(PhotonMapRef map, PhotonArrayRef photons, uint capacity, uint path, uint stratum, uint strata,
-                     uint round) {
+                     uint roundIndex) {
     uint seed = pc.seed ^ 0x5bd1e995u;
     if (pc.passInBlock != 0u) seed ^= pcgHash(pc.passInBlock);  // the passes of a block differ
     Rng rng = rngCreate(path, pc.pass, seed);
@@ -164,7 +163,7 @@ void tracePhotonPath(PhotonMapRef map, PhotonArrayRef photons, uint capacity, ui
                         (kBsdfFamilies != 0u && (isGlossyBsdf(m.type) || m.type == kBsdfMixed || m.type == kBsdfTransparency));
         bool bothSides = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && (m.flags & kMaterialBothSides) != 0u;
         if (nonDelta && (front || kTwoSided || bothSides) && (!kNextEvent || !direct))
-            storePhoton(map, photons, capacity, p, -dir, power, v, round);
+            storePhoton(map, photons, capacity, p, -dir, power, v, roundIndex);
 
         // ---- Scatter ----
         if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
@@ -224,30 +223,24 @@ void tracePhotonPath(PhotonMapRef map, PhotonArrayRef photons, uint capacity, ui
 
 #include "loop_cap.glsl"
 
-// The lane's paths of this dispatch's rounds (PhotonTracePush), and the paths it traced into the
-// header's tracedPaths (one atomic per subgroup). Capped: one round per dispatch, traced only if
-// no earlier round filled the budget (cappedAtRound, final once the earlier dispatches are done:
-// the round's own stores only write values equal to its index).
+// The lane's path of this dispatch's round (PhotonTracePush), counted in the header's tracedPaths
+// (one atomic per subgroup). Capped: traced only if no earlier round filled the budget
+// (cappedAtRound, final once the earlier dispatches are done: the round's own stores only write
+// values equal to its index).
 void traceLane() {
     uint lane = gl_GlobalInvocationID.y * pc.rowThreads + gl_GlobalInvocationID.x;
-    if (lane >= pc.laneCount || kLightCount == 0u) return;
+    uint path = pc.roundIndex * pc.laneCount + lane;
+    if (lane >= pc.laneCount || path >= pc.pathCount || kLightCount == 0u) return;
     PhotonMapRef map = PhotonMapRef(uvec2(pc.headerLo, pc.headerHi));
     bool capped = pc.storeCap != 0xffffffffu;
-    if (capped && map.h.cappedAtRound < pc.roundBegin) return;
+    if (capped && map.h.cappedAtRound < pc.roundIndex) return;
     PhotonArrayRef photons = PhotonArrayRef(uvec2(map.h.photonsLo, map.h.photonsHi));
-    uint capacity = map.h.capacity;
-    uint traced = 0u;
-    for (uint r = pc.roundBegin; r < pc.roundEnd; ++r) {
-        uint path = r * pc.laneCount + lane;
-        if (path >= pc.pathCount) break;
-        uint place = pc.roundBits == 0u ? 0u : bitfieldReverse(r) >> (32u - pc.roundBits);
-        uint stratum = capped ? (lane << pc.roundBits) + place : path;
-        uint strata = capped ? pc.laneCount << pc.roundBits : pc.pathCount;
-        tracePhotonPath(map, photons, capacity, path, stratum, strata, r);
-        ++traced;
-    }
-    uint total = subgroupAdd(traced);
-    if (subgroupElect() && total != 0u) atomicAdd(map.h.tracedPaths, total);
+    uint place = pc.roundBits == 0u ? 0u : bitfieldReverse(pc.roundIndex) >> (32u - pc.roundBits);
+    uint stratum = capped ? (lane << pc.roundBits) + place : path;
+    uint strata = capped ? pc.laneCount << pc.roundBits : pc.pathCount;
+    tracePhotonPath(map, photons, map.h.capacity, path, stratum, strata, pc.roundIndex);
+    uint traced = subgroupBallotBitCount(subgroupBallot(true));
+    if (subgroupElect()) atomicAdd(map.h.tracedPaths, traced);
 }
 
 void main() {

@@ -345,12 +345,12 @@ struct PhotonMapHeader {
 CONST uint kPhotonCapRounds = 64u;
 CONST uint kPhotonCapRoundPaths = 1024u;
 
-// One photon_trace dispatch: lane l (one thread) traces the paths round * laneCount + l of rounds
-// roundBegin .. roundEnd - 1 that are below pathCount. Uncapped (storeCap ~0u): one round of
-// pathCount lanes, path i in stretch i of pathCount of the emission curve. Capped (Tungsten's
-// photon_count: render/photon_passes.cpp "Photon budget"): one round per dispatch, traced only
-// while the earlier rounds stored fewer than storeCap photons; lane l's path of round r takes the
-// stretch l 2^roundBits + bitfieldReverse(r) (roundBits bits) of the curve, shifted by curveShift.
+// One photon_trace dispatch, round roundIndex of the pass: lane l (one thread) traces path
+// roundIndex * laneCount + l if it is below pathCount. Uncapped (storeCap ~0u): one round of pathCount
+// lanes, path i in stretch i of pathCount of the emission curve. Capped (Tungsten's photon_count:
+// render/photon_passes.cpp "Photon budget"): a round is traced only while the earlier rounds
+// stored fewer than storeCap photons; lane l's path of round r takes the stretch
+// l 2^roundBits + bitfieldReverse(r) (roundBits bits) of the curve, shifted by curveShift.
 struct PhotonTracePush {
     uint headerLo; uint headerHi;
     uint pathCount;   // photon paths this pass may trace (photon_count)
@@ -360,7 +360,7 @@ struct PhotonTracePush {
     uint rowThreads;  // threads per row of the 2D dispatch: lane = y * rowThreads + x
     uint passInBlock; // pass within the block (unbiased photon mapping), else 0
     vec3 sceneCentre; float sceneRadius;  // a sphere around the geometry: lights at infinity emit through its disk
-    uint laneCount; uint roundBegin; uint roundEnd; uint roundBits;
+    uint laneCount; uint roundIndex; uint roundBits; uint pad2;
     uint storeCap;    // capped: photons after which no further round starts; ~0u: uncapped
     uint curveShift;  // capped: a uniform shift of the emission curve, drawn per pass
     uint pad0; uint pad1;

@@ -319,8 +319,7 @@ public:
         const uint32_t gx = std::min<uint32_t>(traceGroups, 32768), gy = (traceGroups + gx - 1) / gx;
         tracePush_.rowThreads = gx * shader::kPhotonTraceGroupSize;
         for (uint32_t r = 0; r < budget_.rounds; ++r) {
-            tracePush_.roundBegin = r;
-            tracePush_.roundEnd = r + 1;
+            tracePush_.roundIndex = r;
             batch.dispatch(trace_, &tracePush_, sizeof(tracePush_), gx, gy, 1, passName(PassKind::PhotonTrace));
         }
 
@@ -436,8 +435,6 @@ public:
         shader::PhotonTracePush t = tracePush_;
         t.pathCount = 0;
         t.laneCount = 0;
-        t.roundBegin = 0;
-        t.roundEnd = 1;
         t.headerLo = uint32_t(map_.headerAddress());
         t.headerHi = uint32_t(map_.headerAddress() >> 32);
         batch.dispatch(trace_, &t, sizeof(t), 1, 1, 1, "warm-up");
