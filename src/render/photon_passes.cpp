@@ -228,7 +228,7 @@ public:
           camera_(scene.camera),
           seed_(seed),
           budget_(photonBudget(scene.integrator)),
-          // a capped pass stores up to one path per lane beyond photon_count
+          // a capped pass stores photon_count photons and part of one round more
           map_(context, uint64_t(scene.integrator.photon.photonCount) * (budget_.capped ? 9 : 8) / 8),
           gatherShader_(plannedEntry(plan, PassKind::Gather).shader),
           gatherSpec_(deviceSceneSpec(context, plan.photonSpec, b, false)),
