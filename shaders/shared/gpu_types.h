@@ -360,10 +360,9 @@ struct PhotonTracePush {
     uint rowThreads;  // threads per row of the 2D dispatch: lane = y * rowThreads + x
     uint passInBlock; // pass within the block (unbiased photon mapping), else 0
     vec3 sceneCentre; float sceneRadius;  // a sphere around the geometry: lights at infinity emit through its disk
-    uint laneCount; uint roundIndex; uint roundBits; uint pad2;
+    uint laneCount; uint roundIndex; uint roundBits;
     uint storeCap;    // capped: photons after which no further round starts; ~0u: uncapped
     uint curveShift;  // capped: a uniform shift of the emission curve, drawn per pass
-    uint pad0; uint pad1;
 };
 
 struct HashGridPush {
@@ -408,7 +407,7 @@ SHADER_NAMESPACE_END
 #ifdef __cplusplus
 static_assert(sizeof(telescope::shader::Photon) == 32);
 static_assert(sizeof(telescope::shader::PhotonMapHeader) == 128);
-static_assert(sizeof(telescope::shader::PhotonTracePush) == 80);
+static_assert(sizeof(telescope::shader::PhotonTracePush) == 68);
 static_assert(sizeof(telescope::shader::HashGridPush) == 64);
 static_assert(sizeof(telescope::shader::GatherPush) == 128);
 #endif

@@ -257,6 +257,11 @@ public:
         tracePush_.laneCount = budget_.lanes;
         tracePush_.roundBits = budget_.roundBits;
         tracePush_.storeCap = budget_.capped ? paths : 0xffffffffu;
+        // One lane a thread, 2D when the lanes need more workgroups than one dimension allows.
+        const uint32_t groups = (budget_.lanes + shader::kPhotonTraceGroupSize - 1) / shader::kPhotonTraceGroupSize;
+        traceGroups_.x = std::min<uint32_t>(groups, 32768);
+        traceGroups_.y = (groups + traceGroups_.x - 1) / traceGroups_.x;
+        tracePush_.rowThreads = traceGroups_.x * shader::kPhotonTraceGroupSize;
         setPushCamera(gatherPush_, cam);
         gatherPush_.width = cam.width;
         gatherPush_.height = cam.height;
@@ -298,32 +303,25 @@ public:
         const double radius = baseRadius(in, sampleBase);
         const VkDeviceAddress header = map_.headerAddress();
         if (gatherOnly_) {
-            // The photon map of the last attempt is whole; only its gather lacked slices
-            gatherOnly_ = false;
-            recordGather(batch, sampleBase, radius, header);
-            return blocks() && passInBlock_ + 1 < block_.passes ? 0 : 1;
+            gatherOnly_ = false;  // the photon map of the last attempt is whole; only its gather lacked slices
+        } else {
+            map_.beginPass(float(2.0 * radius), budget_.capped ? tracePush_.pathCount : 0u);
+            countedCapHits_ = 0;
+            tracePush_.headerLo = uint32_t(header);
+            tracePush_.headerHi = uint32_t(header >> 32);
+            tracePush_.pass = uint32_t(sampleBase);
+            tracePush_.passInBlock = passInBlock_;
+            if (budget_.capped) {
+                shader::Rng rng = shader::rngCreate(0x2c1b3c6du, uint32_t(sampleBase), seed_ ^ 0x297a2d39u);
+                tracePush_.curveShift = shader::rngNextUint(rng);
+            }
+            for (uint32_t r = 0; r < budget_.rounds; ++r) {
+                tracePush_.roundIndex = r;
+                batch.dispatch(trace_, &tracePush_, sizeof(tracePush_), traceGroups_.x, traceGroups_.y, 1,
+                               passName(PassKind::PhotonTrace));
+            }
+            map_.recordBuild(batch);
         }
-        map_.beginPass(float(2.0 * radius), budget_.capped ? tracePush_.pathCount : 0u);
-        countedCapHits_ = 0;
-
-        tracePush_.headerLo = uint32_t(header);
-        tracePush_.headerHi = uint32_t(header >> 32);
-        tracePush_.pass = uint32_t(sampleBase);
-        tracePush_.passInBlock = passInBlock_;
-        if (budget_.capped) {
-            shader::Rng rng = shader::rngCreate(0x2c1b3c6du, uint32_t(sampleBase), seed_ ^ 0x297a2d39u);
-            tracePush_.curveShift = shader::rngNextUint(rng);
-        }
-        const uint32_t traceGroups = (budget_.lanes + shader::kPhotonTraceGroupSize - 1) / shader::kPhotonTraceGroupSize;
-        // 2D when the lanes need more workgroups than one dimension allows.
-        const uint32_t gx = std::min<uint32_t>(traceGroups, 32768), gy = (traceGroups + gx - 1) / gx;
-        tracePush_.rowThreads = gx * shader::kPhotonTraceGroupSize;
-        for (uint32_t r = 0; r < budget_.rounds; ++r) {
-            tracePush_.roundIndex = r;
-            batch.dispatch(trace_, &tracePush_, sizeof(tracePush_), gx, gy, 1, passName(PassKind::PhotonTrace));
-        }
-
-        map_.recordBuild(batch);
         recordGather(batch, sampleBase, radius, header);
         return blocks() && passInBlock_ + 1 < block_.passes ? 0 : 1;
     }
@@ -498,6 +496,7 @@ private:
     bool gatherTexels_ = true;               // the gather pipeline's kSpecSortedTexels
     UniformBlock block_;
     shader::PhotonTracePush tracePush_{};
+    glm::uvec2 traceGroups_{1, 1};  // photon_trace's workgroups (x, y) per round
     shader::GatherPush gatherPush_{};
     uint64_t lastStored_ = 0;
     uint64_t lastTraced_ = 0;
