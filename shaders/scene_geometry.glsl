@@ -41,9 +41,11 @@ uint uniformIndex(uint i) {
 BvhNode sceneNode(uint i) {
     if (kSceneInUniforms) return uniformNodes[uniformIndex(i)];
     if (kSceneTexels) {
-        uvec4 a = texelFetch(bvhTexels, int(2u * i));
-        uvec4 b = texelFetch(bvhTexels, int(2u * i + 1u));
-        return BvhNode(uintBitsToFloat(a.xyz), a.w, uintBitsToFloat(b.xyz), b.w);
+        uvec4 a = texelFetch(bvhTexels, int(4u * i));
+        uvec4 b = texelFetch(bvhTexels, int(4u * i + 1u));
+        uvec4 c = texelFetch(bvhTexels, int(4u * i + 2u));
+        uvec4 d = texelFetch(bvhTexels, int(4u * i + 3u));
+        return BvhNode(uintBitsToFloat(a.xyz), uintBitsToFloat(a.w), b, c.xy, uintBitsToFloat(c.zw), d);
     }
     return nodes[i];
 }

@@ -19,11 +19,21 @@ struct Prim {
     vec3 n;  float area;
 };
 
-// BVH node. Inner: count == 0, children first and first + 1. Leaf: prims [first, first+count).
+// BVH node with four children (src/scene/bvh.h collapseBvh; 64 bytes, 4 texels). Child c's box is
+// origin + q * scale per axis, q the byte c of the quantised bounds (qLo.x: lo.x, qLo.y: lo.y,
+// qLo.z: lo.z, qLo.w: hi.x; qHi.x: hi.y, qHi.y: hi.z); scale is a power of two, so q * scale is
+// exact and every device decodes the same floats the host checked to enclose the child. child[c]:
+// a node index, or a leaf (kBvhLeaf | first << 4 | count: prims [first, first + count)), or
+// kBvhNoChild with an empty box (lo > hi). Node 0 is the root.
 struct BvhNode {
-    vec3 lo; uint first;
-    vec3 hi; uint count;
+    vec3 origin; float scaleX;
+    uvec4 qLo;
+    uvec2 qHi; vec2 scaleYZ;
+    uvec4 child;
 };
+CONST uint kBvhLeaf = 0x80000000u;
+CONST uint kBvhNoChild = 0xffffffffu;
+CONST uint kBvhMaxLeafSize = 15u;  // the count's four bits
 
 // ---- Materials (type: kBsdf*) ----
 struct MaterialGpu {
@@ -92,7 +102,7 @@ SHADER_NAMESPACE_END
 static_assert(sizeof(telescope::shader::MediumGpu) == 240);
 static_assert(sizeof(telescope::shader::TrModel) == 48);
 static_assert(sizeof(telescope::shader::Prim) == 64);
-static_assert(sizeof(telescope::shader::BvhNode) == 32);
+static_assert(sizeof(telescope::shader::BvhNode) == 64);
 static_assert(sizeof(telescope::shader::MaterialGpu) == 96);
 static_assert(sizeof(telescope::shader::TextureGpu) == 48);
 static_assert(sizeof(telescope::shader::LightGpu) == 48);
@@ -142,7 +152,7 @@ CONST uint kBindingPrimsTexels = 16u;
 CONST uint kBindingShadingNormalTexels = 17u;
 CONST uint kPathTraceBindingCount = 18u;
 CONST uint kUniformSceneBytes = 65536u;  // maxUniformBufferRange on lavapipe; the Vulkan minimum is 16384
-CONST uint kMaxUniformNodes = 2048u;     // kUniformSceneBytes / sizeof(BvhNode)
+CONST uint kMaxUniformNodes = 1024u;     // kUniformSceneBytes / sizeof(BvhNode)
 CONST uint kMaxUniformPrims = 1024u;     // kUniformSceneBytes / sizeof(Prim)
 CONST uint kMaxUniformMaterials = 682u;  // kUniformSceneBytes / sizeof(MaterialGpu), rounded down
 CONST uint kMaxUniformLights = 1365u;    // ... / sizeof(LightGpu)

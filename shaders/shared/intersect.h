@@ -3,7 +3,7 @@
 // Part 1 (always): intersectBox, intersectTriangle, intersectQuad, intersectSphere, intersectDisk.
 // Part 2 (only when the includer has defined BVH_NODE and BVH_PRIM): intersectPrim,
 // traceClosest, traceAny. Before including this file the includer defines
-//   BVH_NODE(i)              the BvhNode i of the tree from buildBvh (src/scene/bvh.h),
+//   BVH_NODE(i)              the BvhNode i of the tree from collapseBvh (src/scene/bvh.h),
 //   BVH_PRIM(i)              the Prim in leaf slot i (input primitives permuted by Bvh::order),
 //   kHasSpheres, kHasDisks   bool constants (specialisation constants in GLSL, true in C++),
 //   BVH_COUNT_NODE_VISIT()   optional: a statement run once per node entered (a test counter),
@@ -22,7 +22,7 @@
 
 SHADER_NAMESPACE_BEGIN
 
-// Traversal stack entries. buildBvh keeps the tree depth below this (bvh.cpp, kMedianDepth).
+// Traversal stack entries. collapseBvh keeps a walk's pending entries within this (bvh.cpp).
 CONST uint kBvhStackSize = 64u;
 CONST uint kNoPrim = 0xffffffffu;
 
@@ -196,10 +196,41 @@ TRACE_FN bool intersectPrim(Prim p, vec3 origin, vec3 dir, float tMin, float tMa
     return false;
 }
 
-// One traversal for both queries. Closest hit (anyHit false): t in (0, tMax), children entered
-// nearest first, the far child pushed with its entry distance and dropped on pop if a closer hit
-// has been found meanwhile. Any hit (anyHit true, shadow rays): stops at the first hit found.
-// Callers pass a constant anyHit, so each use compiles to one specialised loop.
+// A box test's result for a child the ray misses (above every tMax a query passes, kInfinity).
+CONST float kBoxMiss = 3.4e38f;
+
+// Entry distance of the ray into child c of node (kBoxMiss if it misses the box or the slot is
+// empty), clipped to (0, tMax). The box is decoded as gpu_types.h BvhNode says.
+TRACE_FN float childEntry(BvhNode node, uint c, vec3 origin, vec3 invDir, float tMax) {
+    uint shift = 8u * c;
+    vec3 scale = vec3(node.scaleX, node.scaleYZ.x, node.scaleYZ.y);
+    vec3 qLo = vec3(float((node.qLo.x >> shift) & 0xffu), float((node.qLo.y >> shift) & 0xffu),
+                    float((node.qLo.z >> shift) & 0xffu));
+    vec3 qHi = vec3(float((node.qLo.w >> shift) & 0xffu), float((node.qHi.x >> shift) & 0xffu),
+                    float((node.qHi.y >> shift) & 0xffu));
+    float t = 0.0f;
+    bool entered = intersectBox(node.origin + qLo * scale, node.origin + qHi * scale, origin, invDir, 0.0f, tMax, t);
+    return entered && node.child[c] != kBvhNoChild ? t : kBoxMiss;
+}
+
+// Orders two (entry, reference) pairs by entry.
+TRACE_FN void orderPair(INOUT(float) ta, INOUT(uint) ra, INOUT(float) tb, INOUT(uint) rb) {
+    if (tb < ta) {
+        float t = ta;
+        ta = tb;
+        tb = t;
+        uint r = ra;
+        ra = rb;
+        rb = r;
+    }
+}
+
+// One traversal for both queries. Closest hit (anyHit false): t in (0, tMax); a node's children
+// that the ray enters are ordered by entry distance, the nearest entered next and the others
+// pushed with their entry distance, each dropped on pop if a closer hit has been found meanwhile.
+// Any hit (anyHit true, shadow rays): stops at the first hit found. Callers pass a constant
+// anyHit, so each use compiles to one specialised loop. The walk's entries are node indices and
+// leaf references (gpu_types.h BvhNode child).
 TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) hit) {
     hit.t = tMax;
     hit.prim = kNoPrim;
@@ -227,15 +258,14 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
     uint stack[kBvhStackSize];
     float stackT[kBvhStackSize];
     uint sp = 0u;
-    float tEnter = 0.0f;
-    BvhNode node = BVH_NODE(0u);
-    if (!intersectBox(node.lo, node.hi, origin, invDir, 0.0f, tMax, tEnter)) return false;
+    uint ref = 0u;  // the root
     while (true) {
         BVH_COUNT_NODE_VISIT();
-        bool descend = false;
-        if (node.count > 0u) {
+        if (ref >= kBvhLeaf) {
             // Leaf: test its primitives against the shrinking interval
-            for (uint i = node.first; i < node.first + node.count; ++i) {
+            uint first = (ref & ~kBvhLeaf) >> 4u;
+            uint end = first + (ref & 15u);
+            for (uint i = first; i < end; ++i) {
                 float t = 0.0f;
                 vec2 bary = vec2(0.0f);
                 if (intersectPrim(BVH_PRIM(i), origin, dir, 0.0f, hit.t, t, bary)) {
@@ -246,33 +276,45 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
                 }
             }
         } else {
-            // Inner node: enter the nearer child, push the farther one
-            uint ia = node.first;
-            BvhNode a = BVH_NODE(ia);
-            BvhNode b = BVH_NODE(ia + 1u);
-            float ta = 0.0f;
-            float tb = 0.0f;
-            bool hitA = intersectBox(a.lo, a.hi, origin, invDir, 0.0f, hit.t, ta);
-            bool hitB = intersectBox(b.lo, b.hi, origin, invDir, 0.0f, hit.t, tb);
-            if (hitA && hitB) {
-                bool bFirst = tb < ta;
-                stack[sp] = bFirst ? ia : ia + 1u;
-                stackT[sp] = bFirst ? ta : tb;
-                ++sp;
-                node = bFirst ? b : a;
-                descend = true;
-            } else if (hitA || hitB) {
-                node = hitA ? a : b;
-                descend = true;
+            // Inner node: the four boxes from one node's load, sorted by entry (a sorting network)
+            BvhNode node = BVH_NODE(ref);
+            float t0 = childEntry(node, 0u, origin, invDir, hit.t);
+            float t1 = childEntry(node, 1u, origin, invDir, hit.t);
+            float t2 = childEntry(node, 2u, origin, invDir, hit.t);
+            float t3 = childEntry(node, 3u, origin, invDir, hit.t);
+            uint r0 = node.child.x, r1 = node.child.y, r2 = node.child.z, r3 = node.child.w;
+            orderPair(t0, r0, t1, r1);
+            orderPair(t2, r2, t3, r3);
+            orderPair(t0, r0, t2, r2);
+            orderPair(t1, r1, t3, r3);
+            orderPair(t1, r1, t2, r2);
+            if (t0 < kBoxMiss) {
+                // collapseBvh keeps the entries a walk can leave below kBvhStackSize
+                if (t3 < kBoxMiss) {
+                    stack[sp] = r3;
+                    stackT[sp] = t3;
+                    ++sp;
+                }
+                if (t2 < kBoxMiss) {
+                    stack[sp] = r2;
+                    stackT[sp] = t2;
+                    ++sp;
+                }
+                if (t1 < kBoxMiss) {
+                    stack[sp] = r1;
+                    stackT[sp] = t1;
+                    ++sp;
+                }
+                ref = r0;
+                continue;
             }
         }
-        if (descend) continue;
-        // Pop the next subtree that can still hold a closer hit
+        // Pop the next entry that can still hold a closer hit
         bool popped = false;
         while (sp > 0u && !popped) {
             --sp;
             if (stackT[sp] <= hit.t) {
-                node = BVH_NODE(stack[sp]);
+                ref = stack[sp];
                 popped = true;
             }
         }

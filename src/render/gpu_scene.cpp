@@ -208,7 +208,7 @@ GpuScene buildGpuScene(const Scene& scene) {
     if (!(f.sceneExtent > 0.0f) || !std::isfinite(f.sceneExtent)) f.sceneExtent = 1.0f;
     f.sceneCentre = scene.geometry.empty() ? glm::vec3(0.0f) : 0.5f * (all.lo + all.hi);
     Bvh bvh = buildBvh(boxes);
-    for (const BvhNodeHost& n : bvh.nodes) out.nodes.push_back({n.lo, n.first, n.hi, n.count});
+    out.nodes = collapseBvh(bvh);
 
     // ---- Prims and area lights ----
     std::vector<float> power;

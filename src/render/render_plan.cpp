@@ -91,7 +91,7 @@ std::vector<FeatureSwitch> sceneFeatureSwitches(const std::vector<gpu::SpecConst
         specSwitch(spec, "textures", kSpecHasTextures, "no textured materials"),
         specSwitch(spec, "smooth normals", kSpecSmoothNormals, "every triangle flat-shaded"),
         specSwitch(spec, "uniform scene", kSpecSceneInUniforms,
-                   "more than 2048 BVH nodes or 1024 primitives: read from uniform texel buffers (from storage "
+                   "more than 1024 BVH nodes or 1024 primitives: read from uniform texel buffers (from storage "
                    "buffers on devices whose texel limit the scene exceeds)"),
         specSwitch(spec, "uniform tables", kSpecTablesInUniforms,
                    fmt::format("more than {} materials, {} lights or {} media: read from storage buffers",

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <stdexcept>
 #include <utility>
 
 #include "shared/intersect.h"  // kBvhStackSize: the traversal stack the depth must fit
@@ -240,6 +241,153 @@ Bvh buildBvh(const std::vector<Aabb>& boxes, uint32_t maxLeafSize) {
     bvh.order.resize(n);
     for (uint32_t i = 0; i < n; ++i) bvh.order[i] = refs[i].index;
     return bvh;
+}
+
+namespace {
+
+constexpr float kBoxByteMax = 255.0f;
+
+// The float the shaders decode for byte q on an axis: origin + q * scale, where q * scale is exact
+// (scale a power of two, q below 256), so a fused multiply-add rounds it the same way.
+float decoded(float origin, uint32_t q, float scale) {
+    return origin + float(q) * scale;
+}
+
+// Quantises the children's [lo, hi] on one axis to bytes from origin in steps of scale, rounding
+// outwards; false when a bound needs more than 255 steps.
+bool quantiseAxis(const std::vector<Aabb>& boxes, int axis, float origin, float scale, std::vector<uint32_t>& qLo,
+                  std::vector<uint32_t>& qHi) {
+    for (size_t c = 0; c < boxes.size(); ++c) {
+        const float lo = boxes[c].lo[axis], hi = boxes[c].hi[axis];
+        float steps = std::floor((lo - origin) / scale);
+        uint32_t q = uint32_t(std::clamp(steps, 0.0f, kBoxByteMax));
+        while (q > 0 && decoded(origin, q, scale) > lo) --q;
+        if (decoded(origin, q, scale) > lo) return false;
+        while (q < 255 && decoded(origin, q + 1, scale) <= lo) ++q;  // (steps below the origin's ulp)
+        qLo[c] = q;
+        steps = std::ceil((hi - origin) / scale);
+        if (!(steps <= kBoxByteMax)) return false;
+        q = uint32_t(std::max(steps, 0.0f));
+        while (q < 255 && decoded(origin, q, scale) < hi) ++q;
+        if (decoded(origin, q, scale) < hi) return false;
+        while (q > 0 && decoded(origin, q - 1, scale) >= hi) --q;
+        qHi[c] = q;
+    }
+    return true;
+}
+
+// One node from the children's references and boxes (at most four; the rest empty).
+shader::BvhNode quantiseNode(const std::vector<uint32_t>& refs, const std::vector<Aabb>& boxes) {
+    shader::BvhNode node{};
+    Aabb all;
+    for (const Aabb& b : boxes) all.extend(b);
+    glm::vec3 scale(1.0f);
+    std::vector<uint32_t> qLo(boxes.size()), qHi(boxes.size());
+    std::array<uint32_t, 3> lo{}, hi{};  // four bytes per axis
+    for (int axis = 0; axis < 3; ++axis) {
+        const float origin = all.lo[axis];
+        const float extent = all.hi[axis] - origin;
+        if (!std::isfinite(origin) || !std::isfinite(extent))
+            throw std::invalid_argument("a primitive's bounds are not finite");
+        // The smallest power of two that spans the extent in 255 steps (doubled until rounding fits)
+        int exponent = std::max(extent > 0.0f ? std::ilogb(extent / kBoxByteMax) : -100, -100);
+        float s = std::ldexp(1.0f, exponent);
+        while (!quantiseAxis(boxes, axis, origin, s, qLo, qHi)) {
+            s *= 2.0f;
+            if (!std::isfinite(s)) throw std::invalid_argument("a primitive's bounds are too large to quantise");
+        }
+        scale[axis] = s;
+        node.origin[axis] = origin;
+        for (size_t c = 0; c < boxes.size(); ++c) {
+            lo[axis] |= qLo[c] << (8 * c);
+            hi[axis] |= qHi[c] << (8 * c);
+        }
+    }
+    // Empty slots: lo byte 255 above hi byte 0 (and kBvhNoChild, which the walk skips)
+    for (size_t c = boxes.size(); c < 4; ++c)
+        for (int axis = 0; axis < 3; ++axis) lo[axis] |= 255u << (8 * c);
+    node.scaleX = scale.x;
+    node.scaleYZ = {scale.y, scale.z};
+    node.qLo = {lo[0], lo[1], lo[2], hi[0]};
+    node.qHi = {hi[1], hi[2]};
+    for (size_t c = 0; c < 4; ++c) node.child[c] = c < refs.size() ? refs[c] : shader::kBvhNoChild;
+    return node;
+}
+
+uint32_t leafRef(const BvhNodeHost& leaf) {
+    if (leaf.count > shader::kBvhMaxLeafSize)
+        throw std::invalid_argument("a BVH leaf holds more than kBvhMaxLeafSize primitives");
+    if (leaf.first >= (1u << 27)) throw std::invalid_argument("more than 2^27 primitives");
+    return shader::kBvhLeaf | leaf.first << 4 | leaf.count;
+}
+
+// Appends the node for the binary node `index` (inner, or the root when it is a leaf) and, depth
+// first, those of its inner children; returns its index.
+uint32_t collapse(const Bvh& bvh, uint32_t index, size_t width, std::vector<shader::BvhNode>& out) {
+    const BvhNodeHost& top = bvh.nodes[index];
+    std::vector<uint32_t> kids;
+    if (top.count > 0) kids = {index};
+    else kids = {top.first, top.first + 1};
+    while (kids.size() < width) {
+        // Open the inner child of largest area: its children then face the ray's box tests at once
+        int best = -1;
+        float bestArea = -1.0f;
+        for (size_t k = 0; k < kids.size(); ++k) {
+            const BvhNodeHost& c = bvh.nodes[kids[k]];
+            float area = Aabb{c.lo, c.hi}.area();
+            if (c.count == 0 && area > bestArea) {
+                best = int(k);
+                bestArea = area;
+            }
+        }
+        if (best < 0) break;
+        const uint32_t first = bvh.nodes[kids[size_t(best)]].first;
+        kids[size_t(best)] = first;
+        kids.push_back(first + 1);
+    }
+    const uint32_t self = uint32_t(out.size());
+    out.emplace_back();
+    std::vector<uint32_t> refs;
+    std::vector<Aabb> boxes;
+    for (uint32_t k : kids) {
+        const BvhNodeHost& c = bvh.nodes[k];
+        refs.push_back(c.count > 0 ? leafRef(c) : collapse(bvh, k, width, out));
+        boxes.push_back({c.lo, c.hi});
+    }
+    out[self] = quantiseNode(refs, boxes);
+    return self;
+}
+
+uint32_t stackNeed(const std::vector<shader::BvhNode>& nodes, uint32_t index, uint32_t depth) {
+    if (depth > nodes.size()) throw std::invalid_argument("the BVH has a cycle");
+    uint32_t children = 0, below = 0;
+    for (int c = 0; c < 4; ++c) {
+        const uint32_t ref = nodes.at(index).child[c];
+        if (ref == shader::kBvhNoChild) continue;
+        ++children;
+        if (ref < shader::kBvhLeaf) below = std::max(below, stackNeed(nodes, ref, depth + 1));
+    }
+    return (children > 0 ? children - 1 : 0) + below;
+}
+
+}  // namespace
+
+uint32_t bvhStackNeed(const std::vector<shader::BvhNode>& nodes) {
+    return nodes.empty() ? 0u : stackNeed(nodes, 0u, 0u);
+}
+
+std::vector<shader::BvhNode> collapseBvh(const Bvh& bvh, uint32_t width) {
+    std::vector<shader::BvhNode> out;
+    if (bvh.order.empty()) {
+        out.push_back(quantiseNode({}, {}));  // no children: no ray enters
+        return out;
+    }
+    out.reserve(bvh.nodes.size() / 2 + 1);
+    collapse(bvh, 0u, std::clamp(width, 2u, 4u), out);
+    if (bvhStackNeed(out) <= shader::kBvhStackSize) return out;
+    out.clear();
+    collapse(bvh, 0u, 2, out);  // pending entries at most the binary depth, below kBvhStackSize
+    return out;
 }
 
 }  // namespace telescope

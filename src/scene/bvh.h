@@ -7,6 +7,8 @@
 
 #include <glm/glm.hpp>
 
+#include "shared/gpu_types.h"
+
 namespace telescope {
 
 struct Aabb {
@@ -36,5 +38,20 @@ struct Bvh {
 
 // Builds a binned-SAH BVH over the boxes. maxLeafSize bounds primitives per leaf.
 Bvh buildBvh(const std::vector<Aabb>& boxes, uint32_t maxLeafSize = 4);
+
+// The tree the shaders walk (shared/gpu_types.h BvhNode, shared/intersect.h traceRay): each node
+// takes up to four children from the binary tree, expanding the largest inner child first, with
+// the children's boxes quantised to bytes (conservatively: the decoded box encloses the child's).
+// A walk then visits about half the nodes and loads a node's four boxes in 64 bytes, where the
+// binary tree loaded two in 64. Leaves keep their slots; leaves of more than kBvhMaxLeafSize
+// primitives are refused (std::invalid_argument). Should the walk's stack (the siblings pending
+// along a path) exceed kBvhStackSize, which the binary builder's depth bound does not rule out
+// for four children, the nodes take two children each, whose walk needs no more than the depth.
+// width (2 to 4) is the children a node takes at most (tests).
+std::vector<shader::BvhNode> collapseBvh(const Bvh& bvh, uint32_t width = 4);
+
+// The most entries a walk of these nodes can leave on its stack (the sum, along a path from the
+// root, of each node's children but one).
+uint32_t bvhStackNeed(const std::vector<shader::BvhNode>& nodes);
 
 }  // namespace telescope

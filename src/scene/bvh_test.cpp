@@ -99,8 +99,7 @@ Scene load(std::vector<Prim> prims, uint32_t maxLeafSize) {
     s.prims = std::move(prims);
     for (const Prim& p : s.prims) s.boxes.push_back(boundsOf(p));
     s.bvh = buildBvh(s.boxes, maxLeafSize);
-    bvh_test::nodes.clear();
-    for (const BvhNodeHost& n : s.bvh.nodes) bvh_test::nodes.push_back({n.lo, n.first, n.hi, n.count});
+    bvh_test::nodes = collapseBvh(s.bvh);
     bvh_test::prims.clear();
     for (uint32_t i : s.bvh.order) bvh_test::prims.push_back(s.prims.at(i));
     return s;
@@ -285,7 +284,58 @@ int expectMatchesBruteForce(const Scene& s, const std::vector<TestRay>& rays) {
 struct TreeStats {
     uint32_t maxDepth = 0;
     uint32_t leaves = 0;
+    uint32_t wideLeaves = 0;  // leaf references in the four-child nodes (the same leaves)
+    uint32_t stackNeed = 0;   // bvhStackNeed of the four-child nodes
 };
+
+// The box of child c of a node as the shaders decode it.
+Aabb childBox(const shader::BvhNode& node, uint32_t c) {
+    auto byte = [c](uint32_t word) { return float((word >> (8 * c)) & 0xffu); };
+    vec3 scale(node.scaleX, node.scaleYZ.x, node.scaleYZ.y);
+    vec3 qLo(byte(node.qLo.x), byte(node.qLo.y), byte(node.qLo.z));
+    vec3 qHi(byte(node.qLo.w), byte(node.qHi.x), byte(node.qHi.y));
+    return {node.origin + qLo * scale, node.origin + qHi * scale};
+}
+
+// The four-child nodes the shaders walk: every node reached once from the root, every leaf slot
+// in exactly one leaf, each primitive's box inside every decoded box on its path from the root,
+// and the walk's stack within kBvhStackSize.
+void expectValidWideTree(const std::vector<shader::BvhNode>& nodes, const std::vector<Aabb>& boxes,
+                         const std::vector<uint32_t>& order, TreeStats& stats) {
+    ASSERT_FALSE(nodes.empty());
+    std::vector<int> reached(nodes.size(), 0), slots(order.size(), 0);
+    // (node, the box its parent's slot decodes to; the root's is everything)
+    std::vector<std::pair<uint32_t, Aabb>> stack{{0u, Aabb{vec3(-INFINITY), vec3(INFINITY)}}};
+    while (!stack.empty()) {
+        auto [index, outer] = stack.back();
+        stack.pop_back();
+        ASSERT_LT(index, nodes.size());
+        ASSERT_EQ(reached[index]++, 0) << "node " << index << " reached twice";
+        for (uint32_t c = 0; c < 4; ++c) {
+            const uint32_t ref = nodes[index].child[c];
+            if (ref == shader::kBvhNoChild) continue;
+            // A ray reaches a leaf only through every slot box on its path: their intersection
+            Aabb slot = childBox(nodes[index], c);
+            Aabb box{glm::max(outer.lo, slot.lo), glm::min(outer.hi, slot.hi)};
+            if (ref < shader::kBvhLeaf) {
+                stack.push_back({ref, box});
+                continue;
+            }
+            ++stats.wideLeaves;
+            const uint32_t first = (ref & ~shader::kBvhLeaf) >> 4, count = ref & 15u;
+            EXPECT_GE(count, 1u);
+            ASSERT_LE(size_t(first) + count, order.size());
+            for (uint32_t i = first; i < first + count; ++i) {
+                ++slots[i];
+                EXPECT_TRUE(contains(box, boxes[order[i]])) << "slot " << i;
+            }
+        }
+    }
+    EXPECT_TRUE(std::all_of(reached.begin(), reached.end(), [](int c) { return c == 1; }));
+    EXPECT_TRUE(std::all_of(slots.begin(), slots.end(), [](int c) { return c == 1; }));
+    stats.stackNeed = bvhStackNeed(nodes);
+    EXPECT_LE(stats.stackNeed, shader::kBvhStackSize);
+}
 
 // Every node reached once from the root, children adjacent, boxes nested, leaves holding
 // 1..maxLeafSize primitives whose ranges tile [0, n), order a permutation.
@@ -333,6 +383,7 @@ void expectValidTree(const Bvh& bvh, const std::vector<Aabb>& boxes, uint32_t ma
     EXPECT_TRUE(std::all_of(reached.begin(), reached.end(), [](int c) { return c == 1; }));
     EXPECT_TRUE(std::all_of(slots.begin(), slots.end(), [](int c) { return c == 1; }));
     EXPECT_LT(stats.maxDepth, shader::kBvhStackSize);
+    expectValidWideTree(collapseBvh(bvh), boxes, bvh.order, stats);
 }
 
 // ---- Primitive tests ----
@@ -502,7 +553,7 @@ TEST(Bvh, SinglePrimitive) {
 }
 
 TEST(Bvh, StructureOfRandomScenes) {
-    for (uint32_t maxLeafSize : {1u, 2u, 4u, 8u, 16u}) {
+    for (uint32_t maxLeafSize : {1u, 2u, 4u, 8u, 15u}) {
         SCOPED_TRACE(maxLeafSize);
         Random r(100 + maxLeafSize);
         Scene s = load(randomPrims(r, 3000, maxLeafSize % 2 == 0), maxLeafSize);
@@ -517,6 +568,75 @@ TEST(Bvh, TraversalMatchesBruteForce) {
     int hits = expectMatchesBruteForce(s, randomRays(r, 2000, s.prims));
     EXPECT_GT(hits, 200);  // the scene is neither empty nor a wall
     EXPECT_LT(hits, 1800);
+}
+
+// Two children a node: the tree collapseBvh falls back to when four children would overflow the
+// walk's stack. Its walk finds the same hits, and its stack need is at most the binary depth.
+TEST(Bvh, TwoChildNodesMatchBruteForce) {
+    Random r(2025);
+    Scene s = load(randomPrims(r, 2000, true), 4);
+    bvh_test::nodes = collapseBvh(s.bvh, 2);
+    TreeStats stats;
+    expectValidTree(s.bvh, s.boxes, 4, stats);  // (checks the four-child nodes)
+    const std::vector<shader::BvhNode> four = collapseBvh(s.bvh);
+    EXPECT_GT(bvh_test::nodes.size(), four.size() * 2);  // two children each: about 3x the nodes
+    EXPECT_LE(bvhStackNeed(bvh_test::nodes), stats.maxDepth);
+    EXPECT_GT(bvhStackNeed(four), 0u);
+    expectMatchesBruteForce(s, randomRays(r, 1000, s.prims));
+}
+
+// The quantised boxes are the tightest the bytes allow: one step inwards on any face and the decoded
+// box no longer encloses the child's exact box (so rays do not enter boxes they need not).
+TEST(Bvh, QuantisedBoxesAreTight) {
+    Random r(31);
+    Scene s = load(randomPrims(r, 3000, true), 4);
+    const std::vector<shader::BvhNode> nodes = collapseBvh(s.bvh);
+    int faces = 0, loose = 0;
+    for (const shader::BvhNode& node : nodes) {
+        for (uint32_t c = 0; c < 4; ++c) {
+            if (node.child[c] == shader::kBvhNoChild) continue;
+            // The box of what the slot holds (its primitives, widened by an ulp as buildBvh does)
+            Aabb exact;
+            std::vector<uint32_t> refs{node.child[c]};
+            while (!refs.empty()) {
+                const uint32_t ref = refs.back();
+                refs.pop_back();
+                if (ref < shader::kBvhLeaf) {
+                    for (uint32_t k = 0; k < 4; ++k)
+                        if (nodes[ref].child[k] != shader::kBvhNoChild) refs.push_back(nodes[ref].child[k]);
+                    continue;
+                }
+                const uint32_t first = (ref & ~shader::kBvhLeaf) >> 4, count = ref & 15u;
+                for (uint32_t i = first; i < first + count; ++i) exact.extend(s.boxes[s.bvh.order[i]]);
+            }
+            for (int axis = 0; axis < 3; ++axis) {
+                exact.lo[axis] = std::nextafter(exact.lo[axis], -INFINITY);
+                exact.hi[axis] = std::nextafter(exact.hi[axis], INFINITY);
+            }
+            const Aabb box = childBox(node, c);
+            ASSERT_TRUE(contains(box, exact));
+            const vec3 scale(node.scaleX, node.scaleYZ.x, node.scaleYZ.y);
+            const glm::uvec3 qLo(node.qLo.x, node.qLo.y, node.qLo.z), qHi(node.qLo.w, node.qHi.x, node.qHi.y);
+            for (int axis = 0; axis < 3; ++axis) {
+                faces += 2;
+                // one step in, decoded as the shaders decode
+                const float lo = float(((qLo[axis] >> (8 * c)) & 0xffu) + 1u), hi = float(((qHi[axis] >> (8 * c)) & 0xffu));
+                loose += node.origin[axis] + lo * scale[axis] <= exact.lo[axis];
+                loose += hi > 0.0f && node.origin[axis] + (hi - 1.0f) * scale[axis] >= exact.hi[axis];
+            }
+        }
+    }
+    EXPECT_GT(faces, 6000);
+    EXPECT_EQ(loose, 0) << "of " << faces << " faces";
+}
+
+// Leaves beyond the four bits of a leaf reference are refused, not truncated.
+TEST(Bvh, OversizedLeavesAreRefused) {
+    std::vector<Prim> prims(20, sphere(vec3(1.0f), 0.25f));  // one centroid: no split
+    Scene s = load(prims, 15);
+    Bvh big = buildBvh(s.boxes, 20);
+    ASSERT_EQ(big.nodes[0].count, 20u);  // one leaf of all twenty
+    EXPECT_THROW(collapseBvh(big), std::invalid_argument);
 }
 
 TEST(Bvh, TraversalMatchesBruteForceInsideEnclosingPrimitives) {
@@ -602,8 +722,8 @@ TEST(Bvh, RayInFacePlaneOfBounds) {
     EXPECT_FALSE(shader::traceAny(vec3(3.0f, 1.0f, -5.0f), vec3(0.0f, 0.0f, 1.0f), shader::kInfinity));
 }
 
-// SAH quality: on a 100k-triangle soup a ray enters tens of nodes, against 100k primitive tests
-// by brute force.
+// SAH quality and the four-child nodes: on a 100k-triangle soup a ray enters tens of nodes (and
+// leaves), against 100k primitive tests by brute force.
 TEST(Bvh, TraversalVisitsFewNodes) {
     Random r(3);
     std::vector<Prim> prims;
@@ -624,7 +744,8 @@ TEST(Bvh, TraversalVisitsFewNodes) {
     }
     double perRay = double(bvh_test::nodeVisits) / rays;
     EXPECT_GT(hits, rays / 10);
-    EXPECT_LT(perRay, 150.0) << "of " << s.bvh.nodes.size() << " nodes";  // 58 when written
+    // 30.4 when written (the binary tree, walked directly: 58)
+    EXPECT_LT(perRay, 45.0) << "of " << s.bvh.nodes.size() << " binary nodes";
 }
 
 }  // namespace
