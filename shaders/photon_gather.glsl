@@ -40,20 +40,35 @@ struct GatherSums {
     uint found;       // photons within r_b on the front side
 };
 
-// The sorted photons of cell c (0..7) of the 2x2x2 cells around a query (low: gridNeighbourhood)
+// The sorted photons of cell c (0..7) of the 2x2x2 cells around a query x (low: gridNeighbourhood)
 // that a slice starting at sliceBegin reads, [first, last) with at most sliceLength of them; empty
 // when an earlier cell of the neighbourhood shares the bucket (each bucket is read once: visited
 // holds the earlier cells' buckets) or the bucket ends before the slice. Sets more when the bucket
 // holds photons beyond this slice.
-void neighbourhoodBucket(PhotonMapRef map, ivec3 low, uint c, uint sliceBegin, uint sliceLength,
-                         inout uint visited[8], out uint first, out uint last, inout bool more) {
+// x and bound2: a cell none of whose points is nearer to x than sqrt(bound2) is skipped (no photon
+// there can count), without reading its bucket; the distance is shortened by a margin above the
+// rounding of the cell's bounds and of the photons' cell assignment, so the skip is exact.
+// The cells are read in some order; j is c's place in it (visited[0 .. j-1]: the buckets before).
+void neighbourhoodBucket(PhotonMapRef map, ivec3 low, uint c, uint j, vec3 x, float bound2, uint sliceBegin,
+                         uint sliceLength, inout uint visited[8], out uint first, out uint last, inout bool more) {
     UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
-    uint h = gridHash(low + ivec3(int(c & 1u), int((c >> 1u) & 1u), int(c >> 2u)), map.h.tableSize);
-    bool seen = false;
-    for (uint k = 0u; k < c; ++k) seen = seen || visited[k] == h;
-    visited[c] = h;
+    ivec3 cell = low + ivec3(int(c & 1u), int((c >> 1u) & 1u), int(c >> 2u));
     first = 0u;
     last = 0u;
+    float size = map.h.cellSize;
+    vec3 lo = vec3(cell) * size;
+    vec3 ax = abs(x);
+    float margin = 1e-6 * (max(ax.x, max(ax.y, ax.z)) + size);
+    vec3 away = max(max(lo - x, x - (lo + size)) - margin, vec3(0.0));
+    bool inside = all(lessThan(abs(vec3(cell)), vec3(kGridCellLimit - 1.0)));  // (border cells gather the rest)
+    if (inside && dot(away, away) >= bound2) {
+        visited[j] = 0xffffffffu;  // no bucket: a later cell of the same bucket still reads it
+        return;
+    }
+    uint h = gridHash(cell, map.h.tableSize);
+    bool seen = false;
+    for (uint k = 0u; k < j; ++k) seen = seen || visited[k] == h;
+    visited[j] = h;
     if (seen) return;
     // The scatter left the end of bucket h's range in cellStart[h], so bucket h - 1's end is
     // where h begins (hash_grid_build.comp).
@@ -83,7 +98,7 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
     more = false;
     for (uint c = 0u; c < 8u; ++c) {
         uint first, last;
-        neighbourhoodBucket(map, low, c, sliceBegin, kGatherSliceLength, visited, first, last, more);
+        neighbourhoodBucket(map, low, c, c, x, rb2, sliceBegin, kGatherSliceLength, visited, first, last, more);
         for (uint i = first; i < last; ++i) {
             // The position first: most photons of the cells lie beyond r_b, and the rest of the
             // photon is read only for those within (measured 7% faster than reading it whole).
@@ -150,11 +165,18 @@ void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint k, uint sliceBegin,
                    out bool more) {
     Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
     ivec3 low = gridNeighbourhood(x, map.h.cellSize);
+    // x's own cell first, then those across one face, two, three (c ^ own): once the k nearest of
+    // its own cell are in, the bound (the farthest kept) skips the cells no nearer photon can be
+    // in, which in a crowded caustic is most of them (docs/PHOTON-MAPPING.md "k nearest").
+    ivec3 own = clamp(gridCell(x, map.h.cellSize) - low, ivec3(0), ivec3(1));
+    uint ownIndex = uint(own.x) | uint(own.y) << 1u | uint(own.z) << 2u;
     uint visited[8];
     more = false;
-    for (uint c = 0u; c < 8u; ++c) {
+    for (uint j = 0u; j < 8u; ++j) {
+        uint c = j ^ ownIndex;
         uint first, last;
-        neighbourhoodBucket(map, low, c, sliceBegin, kGatherSliceLength, visited, first, last, more);
+        float bound2 = min(rb2, s.d2[0]);
+        neighbourhoodBucket(map, low, c, j, x, bound2, sliceBegin, kGatherSliceLength, visited, first, last, more);
         for (uint i = first; i < last; ++i) {
             vec3 d = x - uintBitsToFloat(sortedTexel(sorted, 2u * i).xyz);
             float d2 = dot(d, d);
