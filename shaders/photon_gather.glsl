@@ -40,19 +40,23 @@ struct GatherSums {
     uint found;       // photons within r_b on the front side
 };
 
-// The sorted photons of cell c (0..7) of the 2x2x2 cells around a query x (low: gridNeighbourhood)
-// that a slice starting at sliceBegin reads, [first, last) with at most sliceLength of them; empty
-// when an earlier cell of the neighbourhood shares the bucket (each bucket is read once: visited
-// holds the earlier cells' buckets) or the bucket ends before the slice. Sets more when the bucket
-// holds photons beyond this slice.
+// The cells a query reads, at most: the fixed-radius gathers read the 2x2x2 cells of side 2 r_b
+// around x (gridNeighbourhood), the k-nearest gather the 3x3x3 of side r_b around x's own
+// (nearestSearch).
+const uint kNeighbourCells = 27u;
+
+// The sorted photons of a cell of the neighbourhood of a query x that a slice starting at
+// sliceBegin reads, [first, last) with at most sliceLength of them; empty when an earlier cell of
+// the neighbourhood shares the bucket (each bucket is read once: visited holds the earlier cells'
+// buckets) or the bucket ends before the slice. Sets more when the bucket holds photons beyond
+// this slice.
 // x and bound2: a cell none of whose points is nearer to x than sqrt(bound2) is skipped (no photon
 // there can count), without reading its bucket; the distance is shortened by a margin above the
 // rounding of the cell's bounds and of the photons' cell assignment, so the skip is exact.
 // The cells are read in some order; j is c's place in it (visited[0 .. j-1]: the buckets before).
-void neighbourhoodBucket(PhotonMapRef map, ivec3 low, uint c, uint j, vec3 x, float bound2, uint sliceBegin,
-                         uint sliceLength, inout uint visited[8], out uint first, out uint last, inout bool more) {
+void cellBucket(PhotonMapRef map, ivec3 cell, uint j, vec3 x, float bound2, uint sliceBegin, uint sliceLength,
+                inout uint visited[kNeighbourCells], out uint first, out uint last, inout bool more) {
     UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
-    ivec3 cell = low + ivec3(int(c & 1u), int((c >> 1u) & 1u), int(c >> 2u));
     first = 0u;
     last = 0u;
     float size = map.h.cellSize;
@@ -94,11 +98,12 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
     float rj2 = rb2 * exp(logRadius2);
 
     ivec3 low = gridNeighbourhood(x, map.h.cellSize);
-    uint visited[8];
+    uint visited[kNeighbourCells];
     more = false;
     for (uint c = 0u; c < 8u; ++c) {
         uint first, last;
-        neighbourhoodBucket(map, low, c, c, x, rb2, sliceBegin, kGatherSliceLength, visited, first, last, more);
+        ivec3 cell = low + ivec3(int(c & 1u), int((c >> 1u) & 1u), int(c >> 2u));
+        cellBucket(map, cell, c, x, rb2, sliceBegin, kGatherSliceLength, visited, first, last, more);
         for (uint i = first; i < last; ++i) {
             // The position first: most photons of the cells lie beyond r_b, and the rest of the
             // photon is read only for those within (measured 7% faster than reading it whole).
@@ -164,19 +169,20 @@ void nearestReplaceFarthest(inout NearestPhotons s, uint k, float d2, uint index
 void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint k, uint sliceBegin, inout NearestPhotons s,
                    out bool more) {
     Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
-    ivec3 low = gridNeighbourhood(x, map.h.cellSize);
-    // x's own cell first, then those across one face, two, three (c ^ own): once the k nearest of
-    // its own cell are in, the bound (the farthest kept) skips the cells no nearer photon can be
-    // in, which in a crowded caustic is most of them (docs/PHOTON-MAPPING.md "k nearest").
-    ivec3 own = clamp(gridCell(x, map.h.cellSize) - low, ivec3(0), ivec3(1));
-    uint ownIndex = uint(own.x) | uint(own.y) << 1u | uint(own.z) << 2u;
-    uint visited[8];
+    // Cells of side r_b (the host's PhotonMap cell size for k-nearest gathers): every photon within
+    // r_b of x lies in the 3x3x3 cells around x's own. Its own cell first, then the 26 others: once
+    // the k nearest of its own cell are in, the bound (the farthest kept) skips every cell no
+    // nearer photon can lie in, which in a crowded caustic is all of them, and a crowded cell
+    // holds a quarter of the photons the 2 r_b cells held (docs/PHOTON-MAPPING.md "k nearest").
+    ivec3 own = gridCell(x, map.h.cellSize);
+    uint visited[kNeighbourCells];
     more = false;
-    for (uint j = 0u; j < 8u; ++j) {
-        uint c = j ^ ownIndex;
+    for (uint j = 0u; j < 27u; ++j) {
+        uint c = j == 0u ? 13u : (j <= 13u ? j - 1u : j);  // 13: the offset (0, 0, 0)
+        ivec3 cell = own + ivec3(int(c % 3u) - 1, int((c / 3u) % 3u) - 1, int(c / 9u) - 1);
         uint first, last;
         float bound2 = min(rb2, s.d2[0]);
-        neighbourhoodBucket(map, low, c, j, x, bound2, sliceBegin, kGatherSliceLength, visited, first, last, more);
+        cellBucket(map, cell, j, x, bound2, sliceBegin, kGatherSliceLength, visited, first, last, more);
         for (uint i = first; i < last; ++i) {
             vec3 d = x - uintBitsToFloat(sortedTexel(sorted, 2u * i).xyz);
             float d2 = dot(d, d);

@@ -310,9 +310,10 @@ CONST uint kGatherBlockVec4s = 12u;  // per-pixel block buffer of the gather (ga
 CONST uint kMaxGatherCount = 64u;
 // A k-nearest gather keeps the k nearest in a max-heap: each photon nearer than the farthest kept
 // sifts down at most log2(64) = 6 levels, an inner loop the SIMD group runs whenever one lane
-// needs it. Its slices read 512 photons of each bucket: at most 8 x 512 x (1 + 6) = 28672 loop
-// iterations, within lavapipe's 65535 with the camera chain's traversal.
-CONST uint kGatherSliceNearestPhotons = 512u;
+// needs it. Its slices read 128 photons of each of its 27 buckets (photon_gather.glsl
+// nearestSearch): at most 27 x 128 x (1 + 6) = 24192 loop iterations and 351 of the buckets'
+// comparisons, within lavapipe's 65535 with the camera chain's traversal.
+CONST uint kGatherSliceNearestPhotons = 128u;
 // Photons of each bucket one gather dispatch reads (gatherCount: the k of a k-nearest gather, or 0).
 FN uint gatherSlicePhotons(uint gatherCount) {
     return gatherCount > 0u ? kGatherSliceNearestPhotons : kGatherSlicePhotons;
