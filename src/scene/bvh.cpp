@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cfloat>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -259,13 +260,14 @@ bool quantiseAxis(const std::vector<Aabb>& boxes, int axis, float origin, float 
                   std::vector<uint32_t>& qHi) {
     for (size_t c = 0; c < boxes.size(); ++c) {
         const float lo = boxes[c].lo[axis], hi = boxes[c].hi[axis];
-        float steps = std::floor((lo - origin) / scale);
+        // (divided first: the difference of two finite bounds may overflow)
+        float steps = std::floor(lo / scale - origin / scale);
         uint32_t q = uint32_t(std::clamp(steps, 0.0f, kBoxByteMax));
         while (q > 0 && decoded(origin, q, scale) > lo) --q;
         if (decoded(origin, q, scale) > lo) return false;
         while (q < 255 && decoded(origin, q + 1, scale) <= lo) ++q;  // (steps below the origin's ulp)
         qLo[c] = q;
-        steps = std::ceil((hi - origin) / scale);
+        steps = std::ceil(hi / scale - origin / scale);
         if (!(steps <= kBoxByteMax)) return false;
         q = uint32_t(std::max(steps, 0.0f));
         while (q < 255 && decoded(origin, q, scale) < hi) ++q;
@@ -287,14 +289,16 @@ shader::BvhNode quantiseNode(const std::vector<uint32_t>& refs, const std::vecto
     for (int axis = 0; axis < 3; ++axis) {
         const float origin = all.lo[axis];
         const float extent = all.hi[axis] - origin;
-        if (!std::isfinite(origin) || !std::isfinite(extent))
-            throw std::invalid_argument("a primitive's bounds are not finite");
-        // The smallest power of two that spans the extent in 255 steps (doubled until rounding fits)
-        int exponent = std::max(extent > 0.0f ? std::ilogb(extent / kBoxByteMax) : -100, -100);
-        float s = std::ldexp(1.0f, exponent);
+        if (!std::isfinite(origin) || !std::isfinite(all.hi[axis]))
+            throw std::logic_error("BVH bounds not finite (NaN)");
+        // The smallest power of two that spans the extent in 255 steps (doubled until rounding
+        // fits). Bounds near the float range (an extent that overflows) take 2^127, whose top
+        // steps decode to +inf: still enclosing.
+        const int exponent = std::isfinite(extent) && extent > 0.0f ? std::ilogb(extent / kBoxByteMax) : 127;
+        float s = std::ldexp(1.0f, std::clamp(exponent, -100, 127));
         while (!quantiseAxis(boxes, axis, origin, s, qLo, qHi)) {
+            if (s >= 0x1p127f) throw std::logic_error("BVH box quantisation failed");
             s *= 2.0f;
-            if (!std::isfinite(s)) throw std::invalid_argument("a primitive's bounds are too large to quantise");
         }
         scale[axis] = s;
         node.origin[axis] = origin;
@@ -352,7 +356,8 @@ uint32_t collapse(const Bvh& bvh, uint32_t index, size_t width, std::vector<shad
     for (uint32_t k : kids) {
         const BvhNodeHost& c = bvh.nodes[k];
         refs.push_back(c.count > 0 ? leafRef(c) : collapse(bvh, k, width, out));
-        boxes.push_back({c.lo, c.hi});
+        // (bounds beyond the float range hold no finite point: the largest floats enclose them)
+        boxes.push_back({glm::max(c.lo, glm::vec3(-FLT_MAX)), glm::min(c.hi, glm::vec3(FLT_MAX))});
     }
     out[self] = quantiseNode(refs, boxes);
     return self;

@@ -630,6 +630,20 @@ TEST(Bvh, QuantisedBoxesAreTight) {
     EXPECT_EQ(loose, 0) << "of " << faces << " faces";
 }
 
+// Bounds near the float range: a triangle whose box spans 6e38 (more than the largest float) beside
+// small spheres. The quantised boxes take steps of 2^127, whose top ones decode to +inf, and the
+// walk still finds what brute force finds (before the steps were capped there, this threw).
+TEST(Bvh, BoundsBeyondTheFloatRange) {
+    Random r(41);
+    std::vector<Prim> prims{triangle(vec3(-3e38f, -3e38f, -20.0f), vec3(3e38f, -3e38f, -20.0f), vec3(0.0f, 3e38f, -20.0f))};
+    for (int i = 0; i < 200; ++i) prims.push_back(sphere(r.point(10.0f), r.logUniform(0.01f, 1.0f)));
+    Scene s = load(prims, 4);
+    TreeStats stats;
+    expectValidTree(s.bvh, s.boxes, 4, stats);
+    const int hits = expectMatchesBruteForce(s, randomRays(r, 1000, s.prims));
+    EXPECT_GT(hits, 150);  // 237 when written: the spheres and the huge triangle
+}
+
 // Leaves beyond the four bits of a leaf reference are refused, not truncated.
 TEST(Bvh, OversizedLeavesAreRefused) {
     std::vector<Prim> prims(20, sphere(vec3(1.0f), 0.25f));  // one centroid: no split
