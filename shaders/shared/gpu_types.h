@@ -141,8 +141,9 @@ CONST uint kBindingMediaUniform = 13u;
 // Smooth-shaded triangles' vertex normals (scene_common.glsl shadingNormal): three vec4 per prim
 // slot, (n0, 1 if smooth), (n1, 0), (n2, 0); one dummy vec4 in scenes without smooth triangles.
 CONST uint kBindingShadingNormals = 14u;
-// The BVH nodes (2 texels each: lo, first; hi, count) and primitives (4 texels each: p0, type; p1,
-// material; p2, light; n, area) once more, as uniform texel buffers of 4 x uint32 texels: read from
+// The BVH nodes (4 texels each: origin, scale x; the low bytes; the high bytes, scale y, z; the
+// children) and primitives (4 texels each: p0, type; p1, material; p2, light; n, area) once
+// more, as uniform texel buffers of 4 x uint32 texels: read from
 // there when they do not fit the uniform bindings but fit maxTexelBufferElements
 // (kSpecSceneTexels). Lavapipe fetches a texel for all 8 lanes of a SIMD group with vector loads,
 // where a divergent storage-buffer load loops over the lanes once per component. The shading
