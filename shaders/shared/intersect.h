@@ -152,6 +152,25 @@ FN bool intersectDisk(vec3 origin, vec3 dir, vec3 centre, float radius, vec3 nor
     return true;
 }
 
+// ---- Four-child BVH nodes (gpu_types.h BvhNode) ----
+
+// The box of child c of node as every reader decodes it: origin + q * scale per axis.
+FN void bvhChildBox(BvhNode node, uint c, OUT(vec3) lo, OUT(vec3) hi) {
+    uint shift = 8u * c;
+    vec3 scale = vec3(node.scaleX, node.scaleYZ.x, node.scaleYZ.y);
+    vec3 qLo = vec3(float((node.qLo.x >> shift) & 0xffu), float((node.qLo.y >> shift) & 0xffu),
+                    float((node.qLo.z >> shift) & 0xffu));
+    vec3 qHi = vec3(float((node.qLo.w >> shift) & 0xffu), float((node.qHi.x >> shift) & 0xffu),
+                    float((node.qHi.y >> shift) & 0xffu));
+    lo = node.origin + qLo * scale;
+    hi = node.origin + qHi * scale;
+}
+
+// A leaf reference (a child >= kBvhLeaf): prims [first, first + count).
+FN uint bvhLeafRef(uint first, uint count) { return kBvhLeaf | first << 4u | count; }
+FN uint bvhLeafFirst(uint ref) { return (ref & ~kBvhLeaf) >> 4u; }
+FN uint bvhLeafCount(uint ref) { return ref & 15u; }
+
 SHADER_NAMESPACE_END
 
 #endif  // TELESCOPE_INTERSECT_H
@@ -202,14 +221,10 @@ CONST float kBoxMiss = 3.4e38f;
 // Entry distance of the ray into child c of node (kBoxMiss if it misses the box or the slot is
 // empty), clipped to (0, tMax). The box is decoded as gpu_types.h BvhNode says.
 TRACE_FN float childEntry(BvhNode node, uint c, vec3 origin, vec3 invDir, float tMax) {
-    uint shift = 8u * c;
-    vec3 scale = vec3(node.scaleX, node.scaleYZ.x, node.scaleYZ.y);
-    vec3 qLo = vec3(float((node.qLo.x >> shift) & 0xffu), float((node.qLo.y >> shift) & 0xffu),
-                    float((node.qLo.z >> shift) & 0xffu));
-    vec3 qHi = vec3(float((node.qLo.w >> shift) & 0xffu), float((node.qHi.x >> shift) & 0xffu),
-                    float((node.qHi.y >> shift) & 0xffu));
+    vec3 lo, hi;
+    bvhChildBox(node, c, lo, hi);
     float t = 0.0f;
-    bool entered = intersectBox(node.origin + qLo * scale, node.origin + qHi * scale, origin, invDir, 0.0f, tMax, t);
+    bool entered = intersectBox(lo, hi, origin, invDir, 0.0f, tMax, t);
     return entered && node.child[c] != kBvhNoChild ? t : kBoxMiss;
 }
 
@@ -263,8 +278,8 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
         BVH_COUNT_NODE_VISIT();
         if (ref >= kBvhLeaf) {
             // Leaf: test its primitives against the shrinking interval
-            uint first = (ref & ~kBvhLeaf) >> 4u;
-            uint end = first + (ref & 15u);
+            uint first = bvhLeafFirst(ref);
+            uint end = first + bvhLeafCount(ref);
             for (uint i = first; i < end; ++i) {
                 float t = 0.0f;
                 vec2 bary = vec2(0.0f);

@@ -322,7 +322,7 @@ uint32_t leafRef(const BvhNodeHost& leaf) {
     if (leaf.count > shader::kBvhMaxLeafSize)
         throw std::invalid_argument("a BVH leaf holds more than kBvhMaxLeafSize primitives");
     if (leaf.first >= (1u << 27)) throw std::invalid_argument("more than 2^27 primitives");
-    return shader::kBvhLeaf | leaf.first << 4 | leaf.count;
+    return shader::bvhLeafRef(leaf.first, leaf.count);
 }
 
 // Appends the node for the binary node `index` (inner, or the root when it is a leaf) and, depth

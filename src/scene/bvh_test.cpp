@@ -290,11 +290,9 @@ struct TreeStats {
 
 // The box of child c of a node as the shaders decode it.
 Aabb childBox(const shader::BvhNode& node, uint32_t c) {
-    auto byte = [c](uint32_t word) { return float((word >> (8 * c)) & 0xffu); };
-    vec3 scale(node.scaleX, node.scaleYZ.x, node.scaleYZ.y);
-    vec3 qLo(byte(node.qLo.x), byte(node.qLo.y), byte(node.qLo.z));
-    vec3 qHi(byte(node.qLo.w), byte(node.qHi.x), byte(node.qHi.y));
-    return {node.origin + qLo * scale, node.origin + qHi * scale};
+    Aabb box;
+    shader::bvhChildBox(node, c, box.lo, box.hi);
+    return box;
 }
 
 // The four-child nodes the shaders walk: every node reached once from the root, every leaf slot
@@ -322,7 +320,7 @@ void expectValidWideTree(const std::vector<shader::BvhNode>& nodes, const std::v
                 continue;
             }
             ++stats.wideLeaves;
-            const uint32_t first = (ref & ~shader::kBvhLeaf) >> 4, count = ref & 15u;
+            const uint32_t first = shader::bvhLeafFirst(ref), count = shader::bvhLeafCount(ref);
             EXPECT_GE(count, 1u);
             ASSERT_LE(size_t(first) + count, order.size());
             for (uint32_t i = first; i < first + count; ++i) {
@@ -606,7 +604,7 @@ TEST(Bvh, QuantisedBoxesAreTight) {
                         if (nodes[ref].child[k] != shader::kBvhNoChild) refs.push_back(nodes[ref].child[k]);
                     continue;
                 }
-                const uint32_t first = (ref & ~shader::kBvhLeaf) >> 4, count = ref & 15u;
+                const uint32_t first = shader::bvhLeafFirst(ref), count = shader::bvhLeafCount(ref);
                 for (uint32_t i = first; i < first + count; ++i) exact.extend(s.boxes[s.bvh.order[i]]);
             }
             for (int axis = 0; axis < 3; ++axis) {
