@@ -10,6 +10,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_vote : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #define TELESCOPE_INT64  // shared/sampling.h: curvePosition
 
@@ -130,121 +131,186 @@ void storePhoton(PhotonMapRef map, PhotonArrayRef photons, uint capacity, vec3 p
     photons.p[slot] = Photon(p, vertex, power, encodeDirection(wi));
 }
 
-// Path `path` of the pass (in round roundIndex) from the curve's stretch `stratum` of `strata`.
-void tracePhotonPath(PhotonMapRef map, PhotonArrayRef photons, uint capacity, uint path, uint stratum, uint strata,
-                     uint roundIndex) {
+// A photon path in flight: where its next segment starts, the power it carries, the vertex it
+// reaches next, whether its light is still direct, and its random numbers.
+struct PhotonPath {
+    vec3 origin;
+    uint vertex;
+    vec3 dir;
+    bool direct;
+    vec3 power;
+    Rng rng;
+};
+
+// Path `path` of the pass from the curve's stretch `stratum` of `strata`: false if it carries nothing.
+bool startPhotonPath(uint path, uint stratum, uint strata, out PhotonPath ph) {
     uint seed = pc.seed ^ 0x5bd1e995u;
     if (pc.passInBlock != 0u) seed ^= pcgHash(pc.passInBlock);  // the passes of a block differ
-    Rng rng = rngCreate(path, pc.pass, seed);
-
-    vec3 origin, dir, power;
-    emitPhoton(stratum, strata, rng, origin, dir, power);
-    if (!any(greaterThan(power, vec3(0.0)))) return;
+    ph.rng = rngCreate(path, pc.pass, seed);
+    emitPhoton(stratum, strata, ph.rng, ph.origin, ph.dir, ph.power);
     // Direct light until the photon scatters: straight passes (transparency, a thin sheet's
     // transmission) keep it direct, since next-event shadow rays pass those surfaces too.
-    bool direct = true;
-    for (uint v = 1u; v + 1u <= kPhotonMaxBounces; ++v) {
-        Hit hit;
-        if (!traceClosest(origin, dir, kInfinity, hit)) return;
-        Prim pr = scenePrim(hit.prim);
-        vec3 p, ng;
-        hitPoint(pr, origin, dir, hit.t, p, ng);
-        MaterialGpu m = sceneMaterial(pr.material);
-        vec3 ns = shadingNormal(hit.prim, hit.bary, ng);  // ng unless the triangle is smooth-shaded
-        bool front = dot(dir, ns) < 0.0;
-        vec3 n = front ? ns : -ns;  // faces the incoming photon
+    ph.direct = true;
+    ph.vertex = 1u;
+    return any(greaterThan(ph.power, vec3(0.0))) && ph.vertex + 1u <= kPhotonMaxBounces;
+}
 
-        // ---- Store where the material has a non-delta lobe ----
-        // (A mixture's photon is stored before it picks the component it scatters by: the incident
-        // flux does not depend on that choice, and a gather there draws its own component.)
-        // A rough dielectric (or a composite with one: kMaterialBothSides) keeps photons on both
-        // sides: its gather transmits those from the far side.
-        bool nonDelta = m.type == kBsdfLambert ||
-                        (kBsdfFamilies != 0u && (isGlossyBsdf(m.type) || m.type == kBsdfMixed || m.type == kBsdfTransparency));
-        bool bothSides = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && (m.flags & kMaterialBothSides) != 0u;
-        if (nonDelta && (front || kTwoSided || bothSides) && (!kNextEvent || !direct))
-            storePhoton(map, photons, capacity, p, -dir, power, v, roundIndex);
+// One segment of the path (in round roundIndex): the hit, the photon stored there, the bounce.
+// False when the path ends.
+bool photonStep(PhotonMapRef map, PhotonArrayRef photons, uint capacity, uint roundIndex, inout PhotonPath ph) {
+    Hit hit;
+    if (!traceClosest(ph.origin, ph.dir, kInfinity, hit)) return false;
+    vec3 dir = ph.dir;
+    Prim pr = scenePrim(hit.prim);
+    vec3 p, ng;
+    hitPoint(pr, ph.origin, dir, hit.t, p, ng);
+    MaterialGpu m = sceneMaterial(pr.material);
+    vec3 ns = shadingNormal(hit.prim, hit.bary, ng);  // ng unless the triangle is smooth-shaded
+    bool front = dot(dir, ns) < 0.0;
+    vec3 n = front ? ns : -ns;  // faces the incoming photon
 
-        // ---- Scatter ----
-        if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
-        vec3 scale = vec3(1.0);
-        uint index = pr.material;
-        // mixed: one component; transparency: its base, or straight on (pass)
-        bool pass = kBsdfFamilies != 0u && resolveComposite(m, index, scale, pr, hit.prim, hit.bary, p, rng);
-        bool straight = pass;
-        if (pass) {
-            // straight on: a bounce with the direction unchanged
-        } else if ((kBsdfFamilies & kFamilyThinSheet) != 0u && m.type == kBsdfThinSheet) {
-            // specular reflection or straight on (shared/bsdf.h thinSheetScatter)
-            vec3 weight;
-            if (thinSheetScatter(m, abs(dot(dir, ng)), rngNext(rng), weight)) dir = reflect(dir, n);
-            else straight = true;
-            scale *= weight;
-        } else if (m.type == kBsdfLambert) {
-            if (!front && !kTwoSided) return;
-            dir = sampleCosineHemisphere(n, rngNext(rng), rngNext(rng));
-            if (dot(dir, n) <= 0.0) return;
-            scale *= m.albedo;
-        } else if (kHasSpecular && isSpecularBsdf(m.type)) {
-            scale *= scatterSpecular(m, front, n, dir, rng);
-        } else if (kBsdfFamilies != 0u && isGlossyBsdf(m.type)) {
-            // A photon samples the glossy materials as a camera path does, with wi towards where it
-            // came from: the weight eval(wi, wo) / pdf is f(wi -> wo) |cos wo| / pdf, the flux it
-            // carries on towards wo. The reflecting materials are reciprocal (tests/unit/
-            // glossy_bsdf_test.cpp); the rough dielectric's refraction is not, and its eval carries
-            // the eta^2 of wo's side, which is f for light travelling from wi to wo (shared/bsdf.h
-            // roughRefractionRadianceScale). A rough dielectric keeps its outward frame, as in the
-            // path tracer (wi.z < 0 inside).
-            bool dielectric = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && m.type == kBsdfRoughDielectric;
-            if (!front && !kTwoSided && !dielectric) return;
-            vec3 nf = dielectric ? ns : n;
-            vec3 t, b;
-            buildFrame(nf, t, b);
-            vec3 wi = vec3(dot(-dir, t), dot(-dir, b), dot(-dir, nf));
-            vec3 wo, weight;
-            float pdf;
-            bool dirac;
-            if (!glossySample(m, wi, rng, wo, weight, pdf, dirac)) return;
-            dir = normalize(t * wo.x + b * wo.y + nf * wo.z);
-            scale *= weight;
-        } else {
-            return;  // null: black and opaque
-        }
+    // ---- Store where the material has a non-delta lobe ----
+    // (A mixture's photon is stored before it picks the component it scatters by: the incident
+    // flux does not depend on that choice, and a gather there draws its own component.)
+    // A rough dielectric (or a composite with one: kMaterialBothSides) keeps photons on both
+    // sides: its gather transmits those from the far side.
+    bool nonDelta = m.type == kBsdfLambert ||
+                    (kBsdfFamilies != 0u && (isGlossyBsdf(m.type) || m.type == kBsdfMixed || m.type == kBsdfTransparency));
+    bool bothSides = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && (m.flags & kMaterialBothSides) != 0u;
+    if (nonDelta && (front || kTwoSided || bothSides) && (!kNextEvent || !ph.direct))
+        storePhoton(map, photons, capacity, p, -dir, ph.power, ph.vertex, roundIndex);
 
-        // ---- Russian roulette on the throughput factor of this vertex ----
-        float q = min(maxComponent(scale), 1.0);
-        if (!(q > 0.0)) return;
-        if (q < 1.0 && rngNext(rng) >= q) return;
-        power *= scale / q;
-        origin = offsetRayOrigin(p, ng, dir);
-        direct = direct && straight;
+    // ---- Scatter ----
+    if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
+    vec3 scale = vec3(1.0);
+    uint index = pr.material;
+    // mixed: one component; transparency: its base, or straight on (pass)
+    bool pass = kBsdfFamilies != 0u && resolveComposite(m, index, scale, pr, hit.prim, hit.bary, p, ph.rng);
+    bool straight = pass;
+    if (pass) {
+        // straight on: a bounce with the direction unchanged
+    } else if ((kBsdfFamilies & kFamilyThinSheet) != 0u && m.type == kBsdfThinSheet) {
+        // specular reflection or straight on (shared/bsdf.h thinSheetScatter)
+        vec3 weight;
+        if (thinSheetScatter(m, abs(dot(dir, ng)), rngNext(ph.rng), weight)) dir = reflect(dir, n);
+        else straight = true;
+        scale *= weight;
+    } else if (m.type == kBsdfLambert) {
+        if (!front && !kTwoSided) return false;
+        dir = sampleCosineHemisphere(n, rngNext(ph.rng), rngNext(ph.rng));
+        if (dot(dir, n) <= 0.0) return false;
+        scale *= m.albedo;
+    } else if (kHasSpecular && isSpecularBsdf(m.type)) {
+        scale *= scatterSpecular(m, front, n, dir, ph.rng);
+    } else if (kBsdfFamilies != 0u && isGlossyBsdf(m.type)) {
+        // A photon samples the glossy materials as a camera path does, with wi towards where it
+        // came from: the weight eval(wi, wo) / pdf is f(wi -> wo) |cos wo| / pdf, the flux it
+        // carries on towards wo. The reflecting materials are reciprocal (tests/unit/
+        // glossy_bsdf_test.cpp); the rough dielectric's refraction is not, and its eval carries
+        // the eta^2 of wo's side, which is f for light travelling from wi to wo (shared/bsdf.h
+        // roughRefractionRadianceScale). A rough dielectric keeps its outward frame, as in the
+        // path tracer (wi.z < 0 inside).
+        bool dielectric = (kBsdfFamilies & kFamilyRoughDielectric) != 0u && m.type == kBsdfRoughDielectric;
+        if (!front && !kTwoSided && !dielectric) return false;
+        vec3 nf = dielectric ? ns : n;
+        vec3 t, b;
+        buildFrame(nf, t, b);
+        vec3 wi = vec3(dot(-dir, t), dot(-dir, b), dot(-dir, nf));
+        vec3 wo, weight;
+        float pdf;
+        bool dirac;
+        if (!glossySample(m, wi, ph.rng, wo, weight, pdf, dirac)) return false;
+        dir = normalize(t * wo.x + b * wo.y + nf * wo.z);
+        scale *= weight;
+    } else {
+        return false;  // null: black and opaque
     }
+
+    // ---- Russian roulette on the throughput factor of this vertex ----
+    float q = min(maxComponent(scale), 1.0);
+    if (!(q > 0.0)) return false;
+    if (q < 1.0 && rngNext(ph.rng) >= q) return false;
+    ph.power *= scale / q;
+    ph.dir = dir;
+    ph.origin = offsetRayOrigin(p, ng, dir);
+    ph.direct = ph.direct && straight;
+    ++ph.vertex;
+    return ph.vertex + 1u <= kPhotonMaxBounces;
 }
 
 #include "loop_cap.glsl"
 
-// The lane's path of this dispatch's round (PhotonTracePush), counted in the header's tracedPaths
-// (one atomic per subgroup). Capped: traced only if no earlier round filled the budget
+// The paths of this dispatch's round (PhotonTracePush), with path regeneration: the lanes of a
+// subgroup take the round's lanes in chunks of a subgroup's width of consecutive ones (one atomic
+// on the round's roundTaken per chunk) and a lane whose path ended starts the next lane of the chunk, so
+// that the SIMD group's segment loop keeps its lanes busy. (One path a thread left 40% of the
+// lanes idle on the water caustic: a group ran until its longest path ended; docs/BENCHMARKS.md.)
+// A subgroup takes chunks until it has run kTraceSegmentBudget segment iterations: the walks of
+// those segments count towards lavapipe's loop cap like the path tracer's loop budget
+// (kSafeLoopBudget: 64 walks of kRayLoopTicks). The dispatch has a thread for every lane and
+// each subgroup takes at least one chunk, so every chunk of the round is traced; the subgroups
+// that come after the round is taken end at once. Consecutive lanes leave nearby on the
+// emission curve, so a chunk's paths stay coherent.
+// Lane l of round r is path r * laneCount + l (below pathCount); it is counted in the header's
+// tracedPaths. Capped: the round is traced only if no earlier round filled the budget
 // (cappedAtRound, final once the earlier dispatches are done: the round's own stores only write
 // values equal to its index).
-void traceLane() {
-    uint lane = gl_GlobalInvocationID.y * pc.rowThreads + gl_GlobalInvocationID.x;
-    uint path = pc.roundIndex * pc.laneCount + lane;
-    if (lane >= pc.laneCount || path >= pc.pathCount || kLightCount == 0u) return;
+const uint kTraceSegmentBudget = kSafeLoopBudget / kRayLoopTicks;  // 64
+
+void traceLanes() {
+    if (kLightCount == 0u) return;
     PhotonMapRef map = PhotonMapRef(uvec2(pc.headerLo, pc.headerHi));
     bool capped = pc.storeCap != 0xffffffffu;
     if (capped && map.h.cappedAtRound < pc.roundIndex) return;
+    uint laneEnd = min(pc.laneCount, pc.pathCount - min(pc.pathCount, pc.roundIndex * pc.laneCount));
+    if (map.h.roundTaken[pc.roundIndex] >= laneEnd) return;  // the round is taken (the counter only grows)
     PhotonArrayRef photons = PhotonArrayRef(uvec2(map.h.photonsLo, map.h.photonsHi));
+    uint capacity = map.h.capacity;
     uint place = pc.roundBits == 0u ? 0u : bitfieldReverse(pc.roundIndex) >> (32u - pc.roundBits);
-    uint stratum = capped ? (lane << pc.roundBits) + place : path;
-    uint strata = capped ? pc.laneCount << pc.roundBits : pc.pathCount;
-    tracePhotonPath(map, photons, map.h.capacity, path, stratum, strata, pc.roundIndex);
-    uint traced = subgroupBallotBitCount(subgroupBallot(true));
-    if (subgroupElect()) atomicAdd(map.h.tracedPaths, traced);
+
+    uint chunk = gl_SubgroupSize;
+    PhotonPath ph;
+    bool alive = false;
+    uint chunkNext = 0u, chunkEnd = 0u;  // subgroup-uniform: the lanes of the chunk not yet started
+    bool taking = true;                  // subgroup-uniform: more chunks may be taken
+    uint started = 0u;                   // subgroup-uniform: paths started
+    // Each iteration starts a path or runs a segment of a live one; a subgroup takes chunks for
+    // kTraceSegmentBudget iterations and then finishes its live paths and its last chunk's, at most
+    // 2 chunk paths of at most kPhotonMaxBounces - 1 segments each, so the loop never ends by its bound.
+    uint iterations = kTraceSegmentBudget + 2u * chunk * kPhotonMaxBounces;
+    for (uint it = 0u; it < iterations; ++it) {
+        if (chunkNext == chunkEnd && taking && subgroupAny(!alive)) {
+            uint first = 0u;
+            if (subgroupElect()) first = atomicAdd(map.h.roundTaken[pc.roundIndex], chunk);
+            first = subgroupBroadcastFirst(first);
+            chunkNext = min(first, laneEnd);
+            chunkEnd = min(first + chunk, laneEnd);
+            taking = chunkNext < chunkEnd && it < kTraceSegmentBudget;
+        }
+        // idle lanes start the chunk's next lanes, in lane order
+        uvec4 idle = subgroupBallot(!alive);
+        uint rank = subgroupBallotExclusiveBitCount(idle);
+        uint starts = min(subgroupBallotBitCount(idle), chunkEnd - chunkNext);
+        if (!alive && rank < starts) {
+            uint lane = chunkNext + rank;
+            uint path = pc.roundIndex * pc.laneCount + lane;
+            uint stratum = capped ? (lane << pc.roundBits) + place : path;
+            uint strata = capped ? pc.laneCount << pc.roundBits : pc.pathCount;
+            alive = startPhotonPath(path, stratum, strata, ph);
+        }
+        chunkNext += starts;
+        started += starts;
+        if (!subgroupAny(alive)) {
+            if (chunkNext == chunkEnd && !taking) break;
+            continue;
+        }
+        if (alive) alive = photonStep(map, photons, capacity, pc.roundIndex, ph);
+    }
+    if (subgroupElect() && started != 0u) atomicAdd(map.h.tracedPaths, started);
 }
 
 void main() {
-    traceLane();
+    traceLanes();
     // lanes whose loops lavapipe's cap may have ended: the host reports them (an error)
     if (loopCapReached(2u + (pc.pathCount >> 31u)))
         atomicAdd(PhotonMapRef(uvec2(pc.headerLo, pc.headerHi)).h.loopCapHits, 1u);

@@ -336,7 +336,8 @@ struct Photon {
 // maxBucket: the photons of the fullest bucket (written by the scan), which sets the gather's slices.
 // The two counters that shaders change with atomics have a 64-byte cache line of their own: next to
 // the fields every photon store reads (capacity, addresses), each atomic on one core made the
-// other core's next read of those fields a miss (lavapipe; the header is 128 bytes for that).
+// other core's next read of those fields a miss (lavapipe; the header's first 128 bytes are for
+// that). photon_trace's round counters follow, one per round (only the round in flight is written).
 struct PhotonMapHeader {
     uint capacity; uint tableSize; float cellSize;
     uint powerPaths;  // the paths the stored powers were divided by when fewer were traced (Tungsten's cap), else 0
@@ -350,6 +351,7 @@ struct PhotonMapHeader {
     uint pad8; uint pad9; uint pad10;
     uint pad11; uint pad12; uint pad13; uint pad14;
     uint pad15; uint pad16; uint pad17; uint pad18;
+    uint roundTaken[64];  // kPhotonCapRounds: the lanes of round r that photon_trace's subgroups have taken
 };
 
 // Rounds of a pass under Tungsten's photon_count cap, at most (render/photon_passes.cpp,
@@ -357,8 +359,9 @@ struct PhotonMapHeader {
 CONST uint kPhotonCapRounds = 64u;
 CONST uint kPhotonCapRoundPaths = 1024u;
 
-// One photon_trace dispatch, round roundIndex of the pass: lane l (one thread) traces path
-// roundIndex * laneCount + l if it is below pathCount. Uncapped (storeCap ~0u): one round of pathCount
+// One photon_trace dispatch, round roundIndex of the pass: lane l traces path
+// roundIndex * laneCount + l if it is below pathCount (a dispatch has a thread for every lane, and
+// its subgroups take the lanes in chunks: photon_trace.comp traceLanes). Uncapped (storeCap ~0u): one round of pathCount
 // lanes, path i in stretch i of pathCount of the emission curve. Capped (Tungsten's photon_count:
 // render/photon_passes.cpp "Photon budget"): a round is traced only while the earlier rounds
 // stored fewer than storeCap photons; lane l's path of round r takes the stretch
@@ -369,8 +372,8 @@ struct PhotonTracePush {
     uint pass;        // pass index (the sample index of the render)
     uint seed;
     float pathScale;  // 1 / pathCount
-    uint rowThreads;  // threads per row of the 2D dispatch: lane = y * rowThreads + x
     uint passInBlock; // pass within the block (unbiased photon mapping), else 0
+    uint pad0;        // (std430 puts the vec3 at 16 bytes)
     vec3 sceneCentre; float sceneRadius;  // a sphere around the geometry: lights at infinity emit through its disk
     uint laneCount; uint roundIndex; uint roundBits;
     uint storeCap;    // capped: photons after which no further round starts; ~0u: uncapped
@@ -417,9 +420,11 @@ struct GatherPush {
 
 SHADER_NAMESPACE_END
 #ifdef __cplusplus
+#include <cstddef>
 static_assert(sizeof(telescope::shader::Photon) == 32);
-static_assert(sizeof(telescope::shader::PhotonMapHeader) == 128);
+static_assert(sizeof(telescope::shader::PhotonMapHeader) == 384);
 static_assert(sizeof(telescope::shader::PhotonTracePush) == 68);
+static_assert(offsetof(telescope::shader::PhotonTracePush, sceneCentre) % 16 == 0);  // std430 aligns a vec3 to 16
 static_assert(sizeof(telescope::shader::HashGridPush) == 64);
 static_assert(sizeof(telescope::shader::GatherPush) == 128);
 #endif

@@ -257,11 +257,11 @@ public:
         tracePush_.laneCount = budget_.lanes;
         tracePush_.roundBits = budget_.roundBits;
         tracePush_.storeCap = budget_.capped ? paths : 0xffffffffu;
-        // One lane a thread, 2D when the lanes need more workgroups than one dimension allows.
+        // A thread for every lane (photon_trace.comp traceLanes), 2D when the lanes need more workgroups
+        // than one dimension allows.
         const uint32_t groups = (budget_.lanes + shader::kPhotonTraceGroupSize - 1) / shader::kPhotonTraceGroupSize;
         traceGroups_.x = std::min<uint32_t>(groups, 32768);
         traceGroups_.y = (groups + traceGroups_.x - 1) / traceGroups_.x;
-        tracePush_.rowThreads = traceGroups_.x * shader::kPhotonTraceGroupSize;
         setPushCamera(gatherPush_, cam);
         gatherPush_.width = cam.width;
         gatherPush_.height = cam.height;
