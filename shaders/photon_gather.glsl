@@ -1,5 +1,5 @@
-// The photon-map lookup (GLSL only; after the PhotonMapRef declarations): ONE traversal of the
-// 2x2x2 cells around x accumulates, from the same photons, the kernel sum at r_b and the
+// The photon-map lookups (GLSL only; after the PhotonMapRef declarations). Fixed radius: ONE
+// traversal of the 2x2x2 cells around x accumulates, from the same photons, the kernel sum at r_b and the
 // closed-form difference K_{r'} - K_r (shared/photon_density.h). Photons arriving from behind
 // the surface (dot(w_i, n) <= 0) are rejected, unless the includer's PHOTON_BOTH_SIDES says the
 // gather vertex takes both sides (gather.comp: a rough dielectric, whose BSDF transmits them).
@@ -40,48 +40,35 @@ struct GatherSums {
     uint found;       // photons within r_b on the front side
 };
 
-// The cells a query reads, at most: the fixed-radius gathers read the 2x2x2 cells of side 2 r_b
-// around x (gridNeighbourhood), the k-nearest gather the 3x3x3 of side r_b around x's own
-// (nearestSearch).
-const uint kNeighbourCells = 27u;
-
-// The sorted photons of a cell of the neighbourhood of a query x that a slice starting at
-// sliceBegin reads, [first, last) with at most sliceLength of them; empty when an earlier cell of
-// the neighbourhood shares the bucket (each bucket is read once: visited holds the earlier cells'
-// buckets) or the bucket ends before the slice. Sets more when the bucket holds photons beyond
-// this slice.
-// x and bound2: a cell none of whose points is nearer to x than sqrt(bound2) is skipped (no photon
-// there can count), without reading its bucket; the distance is shortened by a margin above the
-// rounding of the cell's bounds and of the photons' cell assignment, so the skip is exact.
-// The cells are read in some order; j is c's place in it (visited[0 .. j-1]: the buckets before).
-void cellBucket(PhotonMapRef map, ivec3 cell, uint j, vec3 x, float bound2, uint sliceBegin, uint sliceLength,
-                inout uint visited[kNeighbourCells], out uint first, out uint last, inout bool more) {
-    UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
-    first = 0u;
-    last = 0u;
+// Whether no point of cell is nearer to x than sqrt(bound2): then no photon there can count and
+// its bucket is not read. The distance is shortened by a margin above the rounding of the cell's
+// bounds and of the photons' cell assignment, so the skip is exact; border cells (which gather
+// every point beyond them) are never skipped.
+bool cellBeyond(PhotonMapRef map, ivec3 cell, vec3 x, float bound2) {
     float size = map.h.cellSize;
     vec3 lo = vec3(cell) * size;
     vec3 ax = abs(x);
     float margin = 1e-6 * (max(ax.x, max(ax.y, ax.z)) + size);
     vec3 away = max(max(lo - x, x - (lo + size)) - margin, vec3(0.0));
-    bool inside = all(lessThan(abs(vec3(cell)), vec3(kGridCellLimit - 1.0)));  // (border cells gather the rest)
-    if (inside && dot(away, away) >= bound2) {
-        visited[j] = 0xffffffffu;  // no bucket: a later cell of the same bucket still reads it
-        return;
-    }
-    uint h = gridHash(cell, map.h.tableSize);
-    bool seen = false;
-    for (uint k = 0u; k < j; ++k) seen = seen || visited[k] == h;
-    visited[j] = h;
-    if (seen) return;
+    bool inside = all(lessThan(abs(vec3(cell)), vec3(kGridCellLimit - 1.0)));
+    return inside && dot(away, away) >= bound2;
+}
+
+// The photons [first, last) of bucket h that a slice starting at sliceBegin reads, at most
+// sliceLength; more is set when the bucket holds photons beyond this slice. A query reads each
+// bucket once: the cells around x (2x2x2, or 5x5x5 for k nearest) lie within 8 of each other on
+// every axis, where gridHash gives distinct buckets (shared/photon_density.h), and a photon of
+// another cell in a bucket read lies 8 cells away at least, beyond r_b.
+void bucketSlice(PhotonMapRef map, uint h, uint sliceBegin, uint sliceLength, out uint first, out uint last,
+                 inout bool more) {
+    UintArrayRef cellStart = UintArrayRef(uvec2(map.h.cellStartLo, map.h.cellStartHi));
     // The scatter left the end of bucket h's range in cellStart[h], so bucket h - 1's end is
     // where h begins (hash_grid_build.comp).
     uint begin = h == 0u ? 0u : cellStart.v[h - 1u];
     uint count = cellStart.v[h] - begin;
     more = more || count - min(count, sliceBegin) > sliceLength;
-    if (sliceBegin >= count) return;
-    first = begin + sliceBegin;
-    last = first + min(count - sliceBegin, sliceLength);
+    first = begin + min(sliceBegin, count);
+    last = begin + min(count, sliceBegin + sliceLength);
 }
 
 // rb2 = r_b^2; logRadius2 = ln(r^2 / r_b^2), logStep2 = ln(r'^2 / r^2); no difference when
@@ -98,12 +85,12 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
     float rj2 = rb2 * exp(logRadius2);
 
     ivec3 low = gridNeighbourhood(x, map.h.cellSize);
-    uint visited[kNeighbourCells];
     more = false;
     for (uint c = 0u; c < 8u; ++c) {
-        uint first, last;
         ivec3 cell = low + ivec3(int(c & 1u), int((c >> 1u) & 1u), int(c >> 2u));
-        cellBucket(map, cell, c, x, rb2, sliceBegin, kGatherSliceLength, visited, first, last, more);
+        if (cellBeyond(map, cell, x, rb2)) continue;
+        uint first, last;
+        bucketSlice(map, gridHash(cell, map.h.tableSize), sliceBegin, kGatherSliceLength, first, last, more);
         for (uint i = first; i < last; ++i) {
             // The position first: most photons of the cells lie beyond r_b, and the rest of the
             // photon is read only for those within (measured 7% faster than reading it whole).
@@ -163,26 +150,26 @@ void nearestReplaceFarthest(inout NearestPhotons s, uint k, float d2, uint index
     s.index[i] = index;
 }
 
-// Photons sliceBegin .. sliceBegin + kGatherSliceLength - 1 of each bucket around x (the
-// buckets of gatherPhotons) offered to the k nearest kept in s; more: whether a later slice has
-// photons for x.
+// Photons sliceBegin .. sliceBegin + kGatherSliceLength - 1 of the bucket of each cell around x
+// offered to the k nearest kept in s; more: whether a later slice has photons for x.
+// Cells of side r_b / m (m = kNearestCellsPerRadius, the host's PhotonMap cell size for k-nearest
+// gathers): every photon within r_b of x lies in the (2m + 1)^3 cells around x's own. Its own cell
+// first, then the others: once the k nearest of its own cell are in, the bound (the farthest kept)
+// skips every cell no nearer photon can lie in, which in a crowded caustic is all of them, so a
+// pixel there reads the photons of one cell of side r_b / 2 (docs/PHOTON-MAPPING.md "k nearest").
 void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint k, uint sliceBegin, inout NearestPhotons s,
                    out bool more) {
     Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
-    // Cells of side r_b (the host's PhotonMap cell size for k-nearest gathers): every photon within
-    // r_b of x lies in the 3x3x3 cells around x's own. Its own cell first, then the 26 others: once
-    // the k nearest of its own cell are in, the bound (the farthest kept) skips every cell no
-    // nearer photon can lie in, which in a crowded caustic is all of them, and a crowded cell
-    // holds a quarter of the photons the 2 r_b cells held (docs/PHOTON-MAPPING.md "k nearest").
     ivec3 own = gridCell(x, map.h.cellSize);
-    uint visited[kNeighbourCells];
+    const int m = int(kNearestCellsPerRadius), n = int(kNearestCellsPerAxis);
+    const uint centre = kNearestCells / 2u;  // the offset (0, 0, 0)
     more = false;
-    for (uint j = 0u; j < 27u; ++j) {
-        uint c = j == 0u ? 13u : (j <= 13u ? j - 1u : j);  // 13: the offset (0, 0, 0)
-        ivec3 cell = own + ivec3(int(c % 3u) - 1, int((c / 3u) % 3u) - 1, int(c / 9u) - 1);
+    for (uint j = 0u; j < kNearestCells; ++j) {
+        uint c = j == 0u ? centre : (j <= centre ? j - 1u : j);
+        ivec3 cell = own + ivec3(int(c) % n - m, (int(c) / n) % n - m, int(c) / (n * n) - m);
+        if (cellBeyond(map, cell, x, min(rb2, s.d2[0]))) continue;
         uint first, last;
-        float bound2 = min(rb2, s.d2[0]);
-        cellBucket(map, cell, j, x, bound2, sliceBegin, kGatherSliceLength, visited, first, last, more);
+        bucketSlice(map, gridHash(cell, map.h.tableSize), sliceBegin, kGatherSliceLength, first, last, more);
         for (uint i = first; i < last; ++i) {
             vec3 d = x - uintBitsToFloat(sortedTexel(sorted, 2u * i).xyz);
             float d2 = dot(d, d);

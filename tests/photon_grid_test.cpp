@@ -189,7 +189,7 @@ Nearest bruteForceNearest(const std::vector<Photon>& photons, glm::vec3 x, glm::
 // make that rare: allowed in 1 query of 1000).
 uint32_t nearestMismatches(uint32_t photonCount, float size, float radius, uint32_t k, uint32_t kernel,
                            uint32_t kth, uint32_t queryCount, uint32_t seed, bool byAddress = false,
-                           bool sparse = false, float cellScale = 1.0f) {
+                           bool sparse = false, float cellScale = 1.0f / kNearestCellsPerRadius) {
     Rng rng = rngCreate(seed, 1, 2);
     const std::vector<Photon> photons = randomPhotons(photonCount, size, rng);
     std::vector<glm::vec3> xs(queryCount), ns(queryCount);
@@ -198,7 +198,7 @@ uint32_t nearestMismatches(uint32_t photonCount, float size, float radius, uint3
         ns[i] = direction(rng);
     }
     PhotonMap map(sharedContext(), photonCount);
-    map.uploadPhotons(photons, cellScale * radius);  // the renderer's cells for k nearest: side r_b
+    map.uploadPhotons(photons, cellScale * radius);  // the renderer's cells for k nearest: side r_b / 2
     std::vector<glm::vec4> got = map.queryNearest(xs, ns, radius, k, kernel, byAddress);
     uint32_t bad = 0, full = 0;
     for (uint32_t i = 0; i < queryCount; ++i) {
@@ -240,7 +240,9 @@ TEST_F(PhotonGrid, NearestPhotonsMatchBruteForceAndTheWrongRadiusDoesNot) {
     EXPECT_EQ(nearestMismatches(20000, 2.0f, 0.2f, 20, kKernelUniform, 20, 256, 67, true), 0u);
     // Control: the radius set by the (k+1)-th photon, the same queries: most must differ.
     EXPECT_GE(nearestMismatches(20000, 2.0f, 0.2f, 20, kKernelUniform, 21, 256, 61), 128u);
-    // Control of the search's reach: cells of side r_b / 2, whose 3x3x3 around x's own miss photons
+    // Control of the search's reach: cells of side r_b / 4, whose 5x5x5 around x's own miss photons
     // between r_b / 2 and r_b (the sparse case, where the radius is r_b): most must differ.
-    EXPECT_GE(nearestMismatches(20000, 2.0f, 0.08f, 20, kKernelUniform, 20, 256, 61, false, true, 0.5f), 128u);
+    EXPECT_GE(nearestMismatches(20000, 2.0f, 0.08f, 20, kKernelUniform, 20, 256, 61, false, true,
+                                0.5f / kNearestCellsPerRadius),
+              128u);
 }

@@ -309,12 +309,17 @@ CONST uint kGatherBlockVec4s = 12u;  // per-pixel block buffer of the gather (ga
 // k-nearest gathers keep the k nearest photons (squared distance, sorted index) of a pixel across
 // slices: after the block vec4s, kMaxGatherCount / 2 vec4 more per pixel.
 CONST uint kMaxGatherCount = 64u;
-// A k-nearest gather keeps the k nearest in a max-heap: each photon nearer than the farthest kept
-// sifts down at most log2(64) = 6 levels, an inner loop the SIMD group runs whenever one lane
-// needs it. Its slices read 128 photons of each of its 27 buckets (photon_gather.glsl
-// nearestSearch): at most 27 x 128 x (1 + 6) = 24192 loop iterations and 351 of the buckets'
-// comparisons, within lavapipe's 65535 with the camera chain's traversal.
-CONST uint kGatherSliceNearestPhotons = 128u;
+// A k-nearest gather searches cells of side r_b / kNearestCellsPerRadius, the 5x5x5 around x's own
+// (photon_gather.glsl nearestSearch).
+CONST uint kNearestCellsPerRadius = 2u;
+CONST uint kNearestCellsPerAxis = 2u * kNearestCellsPerRadius + 1u;
+CONST uint kNearestCells = kNearestCellsPerAxis * kNearestCellsPerAxis * kNearestCellsPerAxis;  // 125
+// It keeps the k nearest in a max-heap: each photon nearer than the farthest kept sifts down at
+// most log2(64) = 6 levels, an inner loop the SIMD group runs whenever one lane needs it. Its
+// slices read 48 photons of each of its 125 buckets: at most 125 x (1 + 48 x (1 + 6)) = 42125 loop
+// iterations, within lavapipe's 65535 with the camera chain's traversal. (A slice is a dispatch
+// over every pixel still gathering: 32 photons a slice took 16% longer on the water caustic.)
+CONST uint kGatherSliceNearestPhotons = 48u;
 // Photons of each bucket one gather dispatch reads (gatherCount: the k of a k-nearest gather, or 0).
 FN uint gatherSlicePhotons(uint gatherCount) {
     return gatherCount > 0u ? kGatherSliceNearestPhotons : kGatherSlicePhotons;

@@ -105,14 +105,24 @@ FN ivec3 gridNeighbourhood(vec3 p, float cellSize) {
     return ivec3(clamp(low, vec3(-kGridCellLimit), vec3(kGridCellLimit)));
 }
 
-// Bucket of a cell in a table of 2^k entries: unsigned arithmetic only (wraps, never overflows).
+// Bucket of a cell in a table of 2^k >= 512 entries: unsigned arithmetic only (wraps, never
+// overflows). Cells go in blocks of 8x8x8: a block's 512 cells take consecutive buckets in Morton
+// order and the block's place is hashed. Nearby cells then take nearby buckets, so a gather's
+// reads of the cells around x stay within a few cache lines (a hash of each cell scattered them
+// over the whole table: docs/BENCHMARKS.md), and two cells less than 8 apart on every axis differ
+// in some coordinate mod 8, so never share a bucket (a gather reads each bucket once).
+FN uint gridMorton3(uint v) {  // v < 8: bits 0, 1, 2 to 0, 3, 6
+    return (v & 1u) | ((v & 2u) << 2u) | ((v & 4u) << 4u);
+}
 FN uint gridHash(ivec3 c, uint tableSize) {
     uvec3 u = uvec3(c);
-    uint h = (u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u);
+    uvec3 b = u >> 3u;
+    uint h = (b.x * 73856093u) ^ (b.y * 19349663u) ^ (b.z * 83492791u);
     h ^= h >> 16u;
     h *= 0x7feb352du;
     h ^= h >> 15u;
-    return h & (tableSize - 1u);
+    uint local = gridMorton3(u.x & 7u) | (gridMorton3(u.y & 7u) << 1u) | (gridMorton3(u.z & 7u) << 2u);
+    return ((h << 9u) | local) & (tableSize - 1u);
 }
 
 // ---- Photon directions: octahedral map to 2 x snorm16 ----

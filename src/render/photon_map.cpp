@@ -21,6 +21,8 @@ constexpr uint64_t kMaxGroups = 4096;  // grid-stride loops cover the rest
 // the caustic Cornell box). Smaller tables made the scan cheaper but the gather slower, by more
 // than the grid gained (1/8 of a bucket per photon: the caustic box's gather 15-20% slower;
 // docs/BENCHMARKS.photon-notes.md).
+// (gridHash keeps the cells around a query in distinct buckets in tables of 512 or more.)
+static_assert(shader::kScanBlock >= 512 && shader::kNearestCellsPerAxis <= 8);
 uint32_t tableSizeFor(uint64_t capacity) {
     uint32_t t = shader::kScanBlock;
     while (t < capacity / 2 && t < kMaxTableSize) t <<= 1;

@@ -305,9 +305,9 @@ public:
         if (gatherOnly_) {
             gatherOnly_ = false;  // the photon map of the last attempt is whole; only its gather lacked slices
         } else {
-            // Cells of side 2 r_b for the fixed-radius gathers (2x2x2 around x), r_b for the
-            // k-nearest (3x3x3 around x's cell: photon_gather.glsl nearestSearch)
-            const double cell = integrator_.photon.gatherCount > 0 ? radius : 2.0 * radius;
+            // Cells of side 2 r_b for the fixed-radius gathers (2x2x2 around x), r_b / 2 for the
+            // k-nearest (5x5x5 around x's cell: photon_gather.glsl nearestSearch)
+            const double cell = integrator_.photon.gatherCount > 0 ? radius / shader::kNearestCellsPerRadius : 2.0 * radius;
             map_.beginPass(float(cell), budget_.capped ? tracePush_.pathCount : 0u);
             countedCapHits_ = 0;
             tracePush_.headerLo = uint32_t(header);

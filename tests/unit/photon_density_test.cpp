@@ -184,6 +184,28 @@ TEST(PhotonGridCells, HashStaysInTheTable) {
         for (int y : {-(1 << 30), -1, 0, 1 << 30}) EXPECT_LT(gridHash(glm::ivec3(x, y, 7), 1024u), 1024u);
 }
 
+TEST(PhotonGridCells, CellsLessThanEightApartNeverShareABucket) {
+    // The gathers read each bucket once because of this (photon_gather.glsl bucketSlice), also at
+    // the smallest table and around the coordinates' sign change and the clamp.
+    Rng rng = rngCreate(4, 5, 6);
+    uint32_t near = 0;
+    for (int i = 0; i < 4000; ++i) {
+        const int big = 1 << 30;
+        glm::ivec3 c(int(rngNextUint(rng) % 64u) - 32, int(rngNextUint(rng) % 64u) - 32, int(rngNextUint(rng)));
+        if (i % 4 == 0) c.z = big - int(rngNextUint(rng) % 16u);
+        glm::ivec3 o(int(rngNextUint(rng) % 15u) - 7, int(rngNextUint(rng) % 15u) - 7, int(rngNextUint(rng) % 15u) - 7);
+        if (o == glm::ivec3(0)) continue;
+        for (uint32_t table : {512u, 4096u, 1u << 22})
+            ASSERT_NE(gridHash(c, table), gridHash(c + o, table)) << "cell " << i << ", table " << table;
+        // Locality: a neighbour in the same block of 8x8x8 takes a bucket of the same 512.
+        if ((c.x & 7) != 7) {
+            const uint32_t a = gridHash(c, 1u << 22), b = gridHash(c + glm::ivec3(1, 0, 0), 1u << 22);
+            near += a / 512u == b / 512u;
+        }
+    }
+    EXPECT_GT(near, 3000u);
+}
+
 TEST(PhotonDirection, OctahedralRoundTrip) {
     Rng rng = rngCreate(9, 9, 9);
     for (int i = 0; i < 10000; ++i) {
