@@ -1,5 +1,6 @@
-// photon_trace: one thread per photon path. A light is picked in proportion to its power, a
-// photon leaves it with power Phi / (p(light) N), follows mirror and dielectric bounces, and is
+// photon_trace: the photon paths of a round, which the subgroups take in chunks (traceLanes,
+// below). A light is picked in proportion to its power, a photon leaves it with power
+// Phi / (p(light) N), follows mirror and dielectric bounces, and is
 // stored at every hit whose material has a non-delta lobe (Lambert and the glossy materials; when
 // direct light comes from next-event estimation, only after the photon first scattered), then
 // continues by sampling the BSDF with Russian roulette on its throughput.
