@@ -335,6 +335,11 @@ struct Photon {
     vec3 power; uint direction;
 };
 
+// Rounds of a pass under Tungsten's photon_count cap, at most (render/photon_passes.cpp,
+// photonBudget); a round has at least kPhotonCapRoundPaths paths.
+CONST uint kPhotonCapRounds = 64u;
+CONST uint kPhotonCapRoundPaths = 1024u;
+
 // The photon map of one pass, in device memory, reached by address. photon_trace counts every
 // photon it stores in storedCount, also those beyond capacity (which it drops): the host then
 // grows the buffers and repeats the pass, so no photon is ever lost.
@@ -356,13 +361,8 @@ struct PhotonMapHeader {
     uint pad8; uint pad9; uint pad10;
     uint pad11; uint pad12; uint pad13; uint pad14;
     uint pad15; uint pad16; uint pad17; uint pad18;
-    uint roundTaken[64];  // kPhotonCapRounds: the lanes of round r that photon_trace's subgroups have taken
+    uint roundTaken[kPhotonCapRounds];  // the lanes of round r that photon_trace's subgroups have taken
 };
-
-// Rounds of a pass under Tungsten's photon_count cap, at most (render/photon_passes.cpp,
-// photonBudget); a round has at least kPhotonCapRoundPaths paths.
-CONST uint kPhotonCapRounds = 64u;
-CONST uint kPhotonCapRoundPaths = 1024u;
 
 // One photon_trace dispatch, round roundIndex of the pass: lane l traces path
 // roundIndex * laneCount + l if it is below pathCount (a dispatch has a thread for every lane, and
