@@ -12,6 +12,7 @@
 // dispatch each, see photon_gather.glsl); the last slice completes the pass.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require  // [[unroll]]: photon_gather.glsl
 
 #include "shared/gpu_types.h"
 #include "shared/rng.h"
@@ -279,14 +280,14 @@ void sliceKernelSums(PhotonMapRef map, uint bi, GatherVertex gv, bool unbiased, 
     if (kGatherCount > 0u) {
         NearestStateRef state = NearestStateRef(uvec2(pc.blockLo, pc.blockHi));
         NearestPhotons nearest;
-        if (pc.slice == 0u) nearestClear(nearest, kGatherCount);
-        else nearestLoad(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
-        nearestSearch(map, gv.p, rb2, kGatherCount, pc.slice * kGatherSliceLength, nearest, more);
+        if (pc.slice == 0u) nearestClear(nearest);
+        else nearestLoad(state, bi + kGatherBlockVec4s, nearest);
+        nearestSearch(map, gv.p, rb2, pc.slice * kGatherSliceLength, nearest, more);
         if (more) {
-            nearestStore(state, bi + kGatherBlockVec4s, nearest, kGatherCount);
+            nearestStore(state, bi + kGatherBlockVec4s, nearest);
             return;
         }
-        sums = nearestSums(map, nearest, gv.n, rb2, kGatherCount, kKernel, kPhotonMaxBounces - gv.vertex);
+        sums = nearestSums(map, nearest, gv.n, rb2, kKernel, kPhotonMaxBounces - gv.vertex);
     } else {
         float logRadius2 = unbiased ? photonLevelLogRadius2(levels, level) : 0.0;
         sums = gatherPhotons(map, gv.p, gv.n, rb2, unbiased, logRadius2, pc.logAreaRatio, kKernel,

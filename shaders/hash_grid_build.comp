@@ -11,6 +11,7 @@
 // 2048 iterations (lavapipe stops the loops of an invocation after 65535 iterations in all).
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require  // [[unroll]]: photon_gather.glsl
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -123,12 +124,12 @@ void queryStage(PhotonMapRef map, uint id) {
         uint stride = 1u + (kGatherCount + 1u) / 2u;
         NearestStateRef state = NearestStateRef(uvec2(pc.dstLo, pc.dstHi));
         NearestPhotons nearest;
-        if (pc.sliceBegin == 0u) nearestClear(nearest, kGatherCount);
-        else nearestLoad(state, id * stride + 1u, nearest, kGatherCount);
+        if (pc.sliceBegin == 0u) nearestClear(nearest);
+        else nearestLoad(state, id * stride + 1u, nearest);
         bool more;  // (unused, as below)
-        nearestSearch(map, src.v[2u * id].xyz, pc.radius * pc.radius, kGatherCount, pc.sliceBegin, nearest, more);
-        nearestStore(state, id * stride + 1u, nearest, kGatherCount);
-        GatherSums s = nearestSums(map, nearest, src.v[2u * id + 1u].xyz, pc.radius * pc.radius, kGatherCount,
+        nearestSearch(map, src.v[2u * id].xyz, pc.radius * pc.radius, pc.sliceBegin, nearest, more);
+        nearestStore(state, id * stride + 1u, nearest);
+        GatherSums s = nearestSums(map, nearest, src.v[2u * id + 1u].xyz, pc.radius * pc.radius,
                                    kKernel, 0xffffffffu);
         dst.v[id * stride] = vec4(s.base.x, 0.0, float(s.found), 0.0);
     } else if (id < pc.count) {

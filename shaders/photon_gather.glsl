@@ -115,39 +115,56 @@ GatherSums gatherPhotons(PhotonMapRef map, vec3 x, vec3 n, float rb2, bool diffe
 // its radius is then the k-th distance r_k when it found k, else r_b, and the estimate is
 // sum_i f Phi_i W_{r}(|x - x_i|) over those photons (uniform kernel: 1 / (pi r^2) each; the
 // k-th photon sits on the kernel's edge and counts). The search keeps the k smallest squared
-// distances and their photons' sorted indices in a max-heap over slots 0 .. k-1 (slots k.. unused)
-// whose empty slots hold +inf (kInfinity): every photon nearer than the root replaces it and sifts
-// down, so filling and replacing are one operation of at most log2(k) steps. A gather in several
-// slices carries the heap in memory between them (nearestStore / nearestLoad: two slots a uvec4).
-// Slices read gatherSlicePhotons(k) photons of each bucket (lavapipe's loop budget: gpu_types.h).
+// distances and their photons' sorted indices in k slots, empty ones at +inf (kInfinity), and the
+// slot of the largest: a photon nearer than it takes its slot, and the largest is found again, so
+// filling and replacing are one operation. A gather in several slices carries the slots in memory
+// between them (nearestStore / nearestLoad: two slots a uvec4). Slices read gatherSlicePhotons(k)
+// photons of each bucket (lavapipe's loop budget: gpu_types.h).
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer NearestStateRef { uvec4 v[]; };
 
+// The slots are arrays of the spec constant's length, and every loop over them runs over all of
+// them and asks to be unrolled ([[unroll]], which Mesa's NIR honours whatever the trip count), so
+// the slots live in registers and the loops add no iterations to lavapipe's loop cap. (A max-heap
+// indexed at run time kept them in memory that lavapipe reads and writes one lane at a time: the
+// k-nearest gather took 9x as long; docs/BENCHMARKS.md.)
+const uint kNearestSlots = kGatherCount == 0u ? 1u : kGatherCount;
 struct NearestPhotons {
-    float d2[kMaxGatherCount];
-    uint index[kMaxGatherCount];
+    float d2[kNearestSlots];
+    uint index[kNearestSlots];
+    float farthest;     // the largest d2 kept: the bound (kInfinity while a slot is empty)
+    uint farthestSlot;  // its slot
 };
 
-void nearestClear(inout NearestPhotons s, uint k) {
-    for (uint j = 0u; j < k; ++j) {
-        s.d2[j] = kInfinity;
-        s.index[j] = 0u;
+// The farthest kept again after a slot changed.
+void nearestFindFarthest(inout NearestPhotons s) {
+    s.farthest = s.d2[0];
+    s.farthestSlot = 0u;
+    [[unroll]] for (uint j = 1u; j < kNearestSlots; ++j) {
+        if (s.d2[j] > s.farthest) {
+            s.farthest = s.d2[j];
+            s.farthestSlot = j;
+        }
     }
 }
 
-// Replaces the farthest photon kept (the heap's root) by one at squared distance d2.
-void nearestReplaceFarthest(inout NearestPhotons s, uint k, float d2, uint index) {
-    uint i = 0u;
-    for (uint level = 0u; level < 6u; ++level) {  // k <= 64: a path of at most 6 edges
-        uint c = 2u * i + 1u;
-        if (c >= k) break;
-        if (c + 1u < k && s.d2[c + 1u] > s.d2[c]) c += 1u;
-        if (!(s.d2[c] > d2)) break;
-        s.d2[i] = s.d2[c];
-        s.index[i] = s.index[c];
-        i = c;
+void nearestClear(inout NearestPhotons s) {
+    [[unroll]] for (uint j = 0u; j < kNearestSlots; ++j) {
+        s.d2[j] = kInfinity;
+        s.index[j] = 0u;
     }
-    s.d2[i] = d2;
-    s.index[i] = index;
+    s.farthest = kInfinity;
+    s.farthestSlot = 0u;
+}
+
+// Replaces the farthest photon kept by one at squared distance d2 (nearer than it).
+void nearestReplaceFarthest(inout NearestPhotons s, float d2, uint index) {
+    [[unroll]] for (uint j = 0u; j < kNearestSlots; ++j) {
+        if (j == s.farthestSlot) {
+            s.d2[j] = d2;
+            s.index[j] = index;
+        }
+    }
+    nearestFindFarthest(s);
 }
 
 // Photons sliceBegin .. sliceBegin + kGatherSliceLength - 1 of the bucket of each cell around x
@@ -157,8 +174,7 @@ void nearestReplaceFarthest(inout NearestPhotons s, uint k, float d2, uint index
 // first, then the others: once the k nearest of its own cell are in, the bound (the farthest kept)
 // skips every cell no nearer photon can lie in, which in a crowded caustic is all of them, so a
 // pixel there reads the photons of one cell of side r_b / 2 (docs/PHOTON-MAPPING.md "k nearest").
-void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint k, uint sliceBegin, inout NearestPhotons s,
-                   out bool more) {
+void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint sliceBegin, inout NearestPhotons s, out bool more) {
     Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
     ivec3 own = gridCell(x, map.h.cellSize);
     const int m = int(kNearestCellsPerRadius), n = int(kNearestCellsPerAxis);
@@ -167,28 +183,28 @@ void nearestSearch(PhotonMapRef map, vec3 x, float rb2, uint k, uint sliceBegin,
     for (uint j = 0u; j < kNearestCells; ++j) {
         uint c = j == 0u ? centre : (j <= centre ? j - 1u : j);
         ivec3 cell = own + ivec3(int(c) % n - m, (int(c) / n) % n - m, int(c) / (n * n) - m);
-        if (cellBeyond(map, cell, x, min(rb2, s.d2[0]))) continue;
+        if (cellBeyond(map, cell, x, min(rb2, s.farthest))) continue;
         uint first, last;
         bucketSlice(map, gridHash(cell, map.h.tableSize), sliceBegin, kGatherSliceLength, first, last, more);
         for (uint i = first; i < last; ++i) {
             vec3 d = x - uintBitsToFloat(sortedTexel(sorted, 2u * i).xyz);
             float d2 = dot(d, d);
-            if (d2 < rb2 && d2 < s.d2[0]) nearestReplaceFarthest(s, k, d2, i);
+            if (d2 < rb2 && d2 < s.farthest) nearestReplaceFarthest(s, d2, i);
         }
     }
 }
 
-// The estimate over the k nearest: kernel radius r_k^2 (the root: the farthest kept) when all k
-// slots are full, else r_b^2; photons arriving from behind the surface (at a vertex that does not
-// take both sides), or stored beyond maxVertex, add nothing but count among the k, as in Tungsten.
-GatherSums nearestSums(PhotonMapRef map, NearestPhotons s, vec3 n, float rb2, uint k, uint kernel, uint maxVertex) {
+// The estimate over the k nearest: kernel radius r_k^2 (the farthest kept) when all k slots are
+// full, else r_b^2; photons arriving from behind the surface (at a vertex that does not take both
+// sides), or stored beyond maxVertex, add nothing but count among the k, as in Tungsten.
+GatherSums nearestSums(PhotonMapRef map, NearestPhotons s, vec3 n, float rb2, uint kernel, uint maxVertex) {
     GatherSums g;
     g.base = vec3(0.0);
     g.difference = vec3(0.0);
     g.found = 0u;
     Uvec4ArrayRef sorted = Uvec4ArrayRef(uvec2(map.h.sortedLo, map.h.sortedHi));
-    float r2 = s.d2[0] < kInfinity ? s.d2[0] : rb2;
-    for (uint j = 0u; j < k; ++j) {
+    float r2 = s.farthest < kInfinity ? s.farthest : rb2;
+    [[unroll]] for (uint j = 0u; j < kNearestSlots; ++j) {
         if (!(s.d2[j] < kInfinity)) continue;
         uvec4 rest = sortedTexel(sorted, 2u * s.index[j] + 1u);
         g.found += 1u;
@@ -199,21 +215,23 @@ GatherSums nearestSums(PhotonMapRef map, NearestPhotons s, vec3 n, float rb2, ui
     return g;
 }
 
-void nearestStore(NearestStateRef state, uint at, NearestPhotons s, uint k) {
-    for (uint j = 0u; j < k; j += 2u) {
-        uint j1 = min(j + 1u, k - 1u);
+// The k nearest so far across slices: two slots a uvec4.
+void nearestStore(NearestStateRef state, uint at, NearestPhotons s) {
+    [[unroll]] for (uint j = 0u; j < kNearestSlots; j += 2u) {
+        uint j1 = min(j + 1u, kNearestSlots - 1u);
         state.v[at + j / 2u] = uvec4(floatBitsToUint(s.d2[j]), s.index[j], floatBitsToUint(s.d2[j1]), s.index[j1]);
     }
 }
 
-void nearestLoad(NearestStateRef state, uint at, inout NearestPhotons s, uint k) {
-    for (uint j = 0u; j < k; j += 2u) {
+void nearestLoad(NearestStateRef state, uint at, inout NearestPhotons s) {
+    [[unroll]] for (uint j = 0u; j < kNearestSlots; j += 2u) {
         uvec4 v = state.v[at + j / 2u];
         s.d2[j] = uintBitsToFloat(v.x);
         s.index[j] = v.y;
-        if (j + 1u < k) {
+        if (j + 1u < kNearestSlots) {
             s.d2[j + 1u] = uintBitsToFloat(v.z);
             s.index[j + 1u] = v.w;
         }
     }
+    nearestFindFarthest(s);
 }

@@ -314,12 +314,13 @@ CONST uint kMaxGatherCount = 64u;
 CONST uint kNearestCellsPerRadius = 2u;
 CONST uint kNearestCellsPerAxis = 2u * kNearestCellsPerRadius + 1u;
 CONST uint kNearestCells = kNearestCellsPerAxis * kNearestCellsPerAxis * kNearestCellsPerAxis;  // 125
-// It keeps the k nearest in a max-heap: each photon nearer than the farthest kept sifts down at
-// most log2(64) = 6 levels, an inner loop the SIMD group runs whenever one lane needs it. Its
-// slices read 48 photons of each of its 125 buckets: at most 125 x (1 + 48 x (1 + 6)) = 42125 loop
-// iterations, within lavapipe's 65535 with the camera chain's traversal. (A slice is a dispatch
-// over every pixel still gathering: 32 photons a slice took 16% longer on the water caustic.)
-CONST uint kGatherSliceNearestPhotons = 48u;
+// It keeps the k nearest in slots whose loops are unrolled (photon_gather.glsl): one loop
+// iteration a photon. Its slices read 320 photons of each of its 125 buckets: at most
+// 125 x (1 + 320) = 40125 loop iterations, within lavapipe's 65535 with the camera chain's
+// traversal. (A slice is a dispatch over every pixel still gathering, about 10 ms on the water
+// caustic even when no pixel has photons left: 48 photons a slice, when a max-heap's sift took up
+// to 6 iterations more a photon, made 307 slices of the 32 passes, 320 make 60.)
+CONST uint kGatherSliceNearestPhotons = 320u;
 // Photons of each bucket one gather dispatch reads (gatherCount: the k of a k-nearest gather, or 0).
 FN uint gatherSlicePhotons(uint gatherCount) {
     return gatherCount > 0u ? kGatherSliceNearestPhotons : kGatherSlicePhotons;
