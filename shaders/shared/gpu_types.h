@@ -317,9 +317,9 @@ CONST uint kNearestCells = kNearestCellsPerAxis * kNearestCellsPerAxis * kNeares
 // It keeps the k nearest in slots whose loops are unrolled (photon_gather.glsl): one loop
 // iteration a photon. Its slices read 320 photons of each of its 125 buckets: at most
 // 125 x (1 + 320) = 40125 loop iterations, within lavapipe's 65535 with the camera chain's
-// traversal. (A slice is a dispatch over every pixel still gathering, about 10 ms on the water
-// caustic even when no pixel has photons left: 48 photons a slice, when a max-heap's sift took up
-// to 6 iterations more a photon, made 307 slices of the 32 passes, 320 make 60.)
+// traversal. (A slice is a dispatch over every pixel still gathering, about 11 ms on the water
+// caustic even when few pixels have photons left: 48 photons a slice, when a max-heap's sift took
+// up to 6 iterations more a photon, made 340 slices of its 32 passes, 320 make 83.)
 CONST uint kGatherSliceNearestPhotons = 320u;
 // Photons of each bucket one gather dispatch reads (gatherCount: the k of a k-nearest gather, or 0).
 FN uint gatherSlicePhotons(uint gatherCount) {
