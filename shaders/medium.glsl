@@ -76,12 +76,51 @@ vec3 gridEmissionAt(uint mi, vec3 p) {
     return e;
 }
 
-// trForm and trForm3 with the model every medium of the scene shares (kSceneTrModel) called by
-// name: conditions on the constant alone, which the host's optimizer removes with everything they
-// guard (trForm's dispatch on its argument reached lavapipe whole, at each of the estimators'
-// calls). With trEstimate's dispatch on kTrEstimatorType (TR_ESTIMATOR_TYPE below), pipeline
-// creation of the media scenes went from 2.2-2.9 s to 0.2-0.5 s (docs/BENCHMARKS.md "Media
-// pipelines"). Scenes whose media differ keep trForm's dispatch, as does a model missing here.
+// trForm and trForm3 with the models the scene's media use (kSceneTrModels) called by name:
+// conditions on the constant alone, which the host's optimizer removes with everything they guard.
+// Lavapipe runs every branch of a dispatch on a run-time type with masks, so trForm's dispatch cost
+// every model's code at each of the estimators' calls: with trEstimate's dispatch on
+// kTrEstimatorType (TR_ESTIMATOR_TYPE below), pipeline creation of the media scenes went from
+// 2.2-2.9 s to 0.2-0.5 s (docs/BENCHMARKS.md "Media pipelines"); scenes whose media use several
+// models (Tungsten's non-exponential: four) dispatch over theirs alone (mediumSimpleForm), and
+// grey media (kGreyMedia) evaluate one channel for three.
+#define SCENE_HAS_TR_MODEL(t) ((kSceneTrModels & (1u << (t))) != 0u)
+// The one model every medium uses, or 0xffffffff.
+const uint kSceneTrModel =
+    kSceneTrModels == (1u << kTrExponential)         ? kTrExponential
+    : kSceneTrModels == (1u << kTrLinear)            ? kTrLinear
+    : kSceneTrModels == (1u << kTrQuadratic)         ? kTrQuadratic
+    : kSceneTrModels == (1u << kTrDoubleExponential) ? kTrDoubleExponential
+    : kSceneTrModels == (1u << kTrErlang)            ? kTrErlang
+    : kSceneTrModels == (1u << kTrDavis)             ? kTrDavis
+    : kSceneTrModels == (1u << kTrDavisWeinstein)    ? kTrDavisWeinstein
+    : kSceneTrModels == (1u << kTrPulse)             ? kTrPulse
+                                                     : 0xffffffffu;
+// trSimpleForm over the scene's simple models (tau >= 0).
+float mediumSimpleForm(uint type, vec4 p, uint form, float tau) {
+    if (SCENE_HAS_TR_MODEL(kTrLinear)) {
+        if (type == kTrLinear) return trLinearForm(p, form, tau);
+    }
+    if (SCENE_HAS_TR_MODEL(kTrQuadratic)) {
+        if (type == kTrQuadratic) return trQuadraticForm(p, form, tau);
+    }
+    if (SCENE_HAS_TR_MODEL(kTrDoubleExponential)) {
+        if (type == kTrDoubleExponential) return trDoubleExponentialForm(p, form, tau);
+    }
+    if (SCENE_HAS_TR_MODEL(kTrErlang)) {
+        if (type == kTrErlang) return trErlangForm(p, form, tau);
+    }
+    if (SCENE_HAS_TR_MODEL(kTrDavis)) {
+        if (type == kTrDavis) return trDavisForm(p, form, tau);
+    }
+    if (SCENE_HAS_TR_MODEL(kTrDavisWeinstein)) {
+        if (type == kTrDavisWeinstein) return trDavisWeinsteinForm(p, form, tau);
+    }
+    if (SCENE_HAS_TR_MODEL(kTrPulse)) {
+        if (type == kTrPulse) return trPulseForm(p, form, tau);
+    }
+    return exp(-tau);  // exponential: every form
+}
 float mediumForm(TrModel m, uint form, float tau) {
     if (kSceneTrModel == kTrExponential) return exp(-max(tau, 0.0));
     if (kSceneTrModel == kTrLinear) return trLinearForm(m.a, form, max(tau, 0.0));
@@ -91,16 +130,26 @@ float mediumForm(TrModel m, uint form, float tau) {
     if (kSceneTrModel == kTrDavis) return trDavisForm(m.a, form, max(tau, 0.0));
     if (kSceneTrModel == kTrDavisWeinstein) return trDavisWeinsteinForm(m.a, form, max(tau, 0.0));
     if (kSceneTrModel == kTrPulse) return trPulseForm(m.a, form, max(tau, 0.0));
+    if (!SCENE_HAS_TR_MODEL(kTrInterpolated)) return mediumSimpleForm(m.type, m.a, form, max(tau, 0.0));
     return trForm(m, form, tau);
 }
 vec3 mediumForm3(TrModel m, uint form, vec3 tau) {
     if (kSceneTrModel == kTrExponential) return exp(-tau);
+    if (kGreyMedia) return vec3(mediumForm(m, form, tau.x));
     if (kSceneTrModel != 0xffffffffu)
         return vec3(mediumForm(m, form, tau.x), mediumForm(m, form, tau.y), mediumForm(m, form, tau.z));
     return trForm3(m, form, tau);
 }
 #define TR_FORM3 mediumForm3
 #define TR_FORM mediumForm
+// sampleGuideDepth's closed forms for the scene's models alone, and its bisection only for models
+// without one (shared/free_flight.h).
+#define TR_GUIDE_HAS(t) SCENE_HAS_TR_MODEL(t)
+// (Bits, not ||: glslang writes a chain of || between specialisation constants as control flow.)
+const uint kBisectionModels = (1u << kTrErlang) | (1u << kTrDavisWeinstein) | (1u << kTrInterpolated) |
+                              (uint(kHasInhomogeneous) << kTrPulse);
+const bool kGuideBisection = (kSceneTrModels & kBisectionModels) != 0u;
+#define TR_GUIDE_BISECTION kGuideBisection
 #define TR_GRID_DENSITY(s, t) gridDensityAt((s).medium, (s).origin + (s).dir * (t))
 #define TR_TAYLOR_OUTSIDE_DISPATCH  // mediumTransmittance calls trTaylor under kTrEstimatorType alone
 #define TR_ESTIMATOR_TYPE(e) kTrEstimatorType  // trEstimate keeps only the scene's estimator

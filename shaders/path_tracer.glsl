@@ -30,53 +30,95 @@ void addContribution(inout PathResult r, uint bounce, vec3 c, LevelPmf pmf, uint
 
 #include "scene_common.glsl"
 
-// Next-event estimation from a Lambertian point p with normal n (facing the viewer):
-// one light picked by power, one shadow ray, MIS against cosine sampling. With media the shadow
-// ray starts in `medium` (index + 1) and `crossings` counts the forward surfaces it passed.
-vec3 sampleDirectLambert(vec3 p, vec3 ng, vec3 n, vec3 albedo, uint medium, inout Rng rng, out uint crossings) {
+// ---- Next-event estimation: the light is sampled at the vertex, its shadow ray traced once ----
+// Each kind of vertex (Lambertian, glossy, medium) samples a light where it scatters and leaves a
+// shadow query; pathStep traces the query after the vertex's step, whatever kind left it. Lavapipe
+// runs every branch of a SIMD group with masks, so a walk written at each kind's call site cost a
+// whole traversal per site and step wherever the group's lanes held different kinds (media scenes:
+// medium and surface vertices side by side); one call site traces one.
+struct ShadowQuery {
+    vec3 origin;
+    vec3 dir;
+    float tMax;
+    vec3 value;           // the light's contribution at the vertex if the ray gets through
+    vec3 throughput;      // the path's throughput at the vertex
+    uint medium;          // the medium the ray starts in, index + 1 (0 = vacuum)
+    uint bounce;          // the contribution's bounces before the forward surfaces the ray crosses
+    bool startOnSurface;  // the transmittance's form at the ray's start
+    bool pending;
+};
+
+ShadowQuery noShadowQuery() {
+    ShadowQuery q;
+    q.origin = vec3(0.0);
+    q.dir = vec3(0.0, 0.0, 1.0);
+    q.tMax = 0.0;
+    q.value = vec3(0.0);
+    q.throughput = vec3(0.0);
+    q.medium = 0u;
+    q.bounce = 0u;
+    q.startOnSurface = true;
+    q.pending = false;
+    return q;
+}
+
+// A query for the shadow ray from surface point p (geometric normal ng) towards light sample ls.
+ShadowQuery surfaceShadowQuery(vec3 p, vec3 ng, LightSample ls, vec3 value, vec3 throughput, uint medium, uint bounce) {
+    ShadowQuery q;
+    q.origin = offsetRayOrigin(p, ng, ls.wi);
+    q.dir = ls.wi;
+    q.tMax = ls.dist < kInfinity ? max(ls.dist - length(q.origin - p), 0.0) : kInfinity;
+    q.value = value;
+    q.throughput = throughput;
+    q.medium = medium;
+    q.bounce = bounce;
+    q.startOnSurface = true;
+    q.pending = any(greaterThan(value, vec3(0.0)));
+    return q;
+}
+
+// Traces the query: the transmittance along its ray (media and pass-through surfaces) or its
+// visibility, and `crossings`, the forward surfaces it passed (each a bounce, as in Tungsten).
+vec3 traceShadowQuery(ShadowQuery q, inout Rng rng, out uint crossings) {
     crossings = 0u;
+    if (kHasMedia || kHasPassThrough)
+        return q.throughput * (q.value * shadowTransmittance(q.origin, q.dir, q.tMax, q.medium, q.startOnSurface, rng, crossings));
+    if (traceAny(q.origin, q.dir, q.tMax)) return vec3(0.0);
+    return q.throughput * q.value;
+}
+
+// Next-event estimation from a Lambertian point p with normal n (facing the viewer), reached with
+// the given throughput as vertex `bounce`: one light picked by power, MIS against cosine sampling.
+// With media the shadow ray starts in `medium` (index + 1).
+ShadowQuery sampleDirectLambert(vec3 p, vec3 ng, vec3 n, vec3 albedo, vec3 throughput, uint medium, uint bounce,
+                                inout Rng rng) {
     LightSample ls;
-    if (!sampleLight(p, rng, ls)) return vec3(0.0);
+    if (!sampleLight(p, rng, ls)) return noShadowQuery();
     float cosS = dot(n, ls.wi);
-    if (cosS <= 0.0) return vec3(0.0);
+    if (cosS <= 0.0) return noShadowQuery();
     float mis = ls.pdf > 0.0 ? powerHeuristic(ls.pdf, cosS * kInvPi) : 1.0;
     vec3 value = ls.weight * cosS * mis;
-    if (!any(greaterThan(value, vec3(0.0)))) return vec3(0.0);
-
-    // One shadow ray for every kind of light.
-    vec3 o = offsetRayOrigin(p, ng, ls.wi);
-    float tMax = ls.dist < kInfinity ? max(ls.dist - length(o - p), 0.0) : kInfinity;
-    if (kHasMedia || kHasPassThrough)
-        return albedo * kInvPi * value * shadowTransmittance(o, ls.wi, tMax, medium, true, rng, crossings);
-    if (traceAny(o, ls.wi, tMax)) return vec3(0.0);
-    return albedo * kInvPi * value;
+    if (!any(greaterThan(value, vec3(0.0)))) return noShadowQuery();
+    return surfaceShadowQuery(p, ng, ls, albedo * kInvPi * value, throughput, medium, bounce);
 }
 
 #ifdef TELESCOPE_GLOSSY
 // Next-event estimation from a glossy material (shared/bsdf.h glossy*): as sampleDirectLambert, with
 // the BSDF evaluated in the local frame (t, b, n) for the viewer direction wi (local).
 // The shadow ray starts in the medium on the light's side of the surface (prim, current medium).
-vec3 sampleDirectGlossy(vec3 p, vec3 ng, vec3 n, vec3 t, vec3 b, vec3 wi, MaterialGpu m, uint prim, uint medium,
-                        inout Rng rng, out uint crossings) {
-    crossings = 0u;
+ShadowQuery sampleDirectGlossy(vec3 p, vec3 ng, vec3 n, vec3 t, vec3 b, vec3 wi, MaterialGpu m, uint prim,
+                               vec3 throughput, uint medium, uint bounce, inout Rng rng) {
     LightSample ls;
-    if (!sampleLight(p, rng, ls)) return vec3(0.0);
+    if (!sampleLight(p, rng, ls)) return noShadowQuery();
     vec3 wo = vec3(dot(ls.wi, t), dot(ls.wi, b), dot(ls.wi, n));
-    if (wo.z == 0.0) return vec3(0.0);
+    if (wo.z == 0.0) return noShadowQuery();
     vec3 f = glossyEval(m, wi, wo);
     if ((kBsdfFamilies & kFamilyRoughDielectric) != 0u && m.type == kBsdfRoughDielectric)
         f *= roughRefractionRadianceScale(m.ior, wi, wo);  // the BSDF-sampled paths' scaling, below
-    if (!any(greaterThan(f, vec3(0.0)))) return vec3(0.0);
+    if (!any(greaterThan(f, vec3(0.0)))) return noShadowQuery();
     float mis = ls.pdf > 0.0 ? powerHeuristic(ls.pdf, glossyPdf(m, wi, wo)) : 1.0;
-    vec3 value = f * ls.weight * mis;
-    vec3 o = offsetRayOrigin(p, ng, ls.wi);
-    float tMax = ls.dist < kInfinity ? max(ls.dist - length(o - p), 0.0) : kInfinity;
-    if (kHasMedia || kHasPassThrough) {
-        uint shadowMedium = kHasMedia ? mediumAcross(prim, ng, ls.wi, medium) : 0u;
-        return value * shadowTransmittance(o, ls.wi, tMax, shadowMedium, true, rng, crossings);
-    }
-    if (traceAny(o, ls.wi, tMax)) return vec3(0.0);
-    return value;
+    uint shadowMedium = kHasMedia ? mediumAcross(prim, ng, ls.wi, medium) : 0u;
+    return surfaceShadowQuery(p, ng, ls, f * ls.weight * mis, throughput, shadowMedium, bounce);
 }
 
 #endif
@@ -84,13 +126,22 @@ vec3 sampleDirectGlossy(vec3 p, vec3 ng, vec3 n, vec3 t, vec3 b, vec3 wi, Materi
 // Next-event estimation from a scattering point p in medium mi (index), travelling along dir:
 // the phase function instead of the BSDF, MIS against phase sampling (withMis false: the path ends
 // here, so no phase-sampled ray will find the light and light sampling takes the whole weight).
-vec3 sampleDirectMedium(vec3 p, vec3 dir, uint mi, bool withMis, inout Rng rng, out uint crossings) {
-    crossings = 0u;
+ShadowQuery sampleDirectMedium(vec3 p, vec3 dir, uint mi, bool withMis, vec3 throughput, uint bounce, inout Rng rng) {
     LightSample ls;
-    if (!sampleLight(p, rng, ls)) return vec3(0.0);
+    if (!sampleLight(p, rng, ls)) return noShadowQuery();
     float phase = phaseHG(dot(dir, ls.wi), mediumPhaseG(mi));
     float mis = (withMis && ls.pdf > 0.0) ? powerHeuristic(ls.pdf, phase) : 1.0;
-    return ls.weight * phase * mis * shadowTransmittance(p, ls.wi, ls.dist, mi + 1u, false, rng, crossings);
+    ShadowQuery q;
+    q.origin = p;
+    q.dir = ls.wi;
+    q.tMax = ls.dist;
+    q.value = ls.weight * phase * mis;
+    q.throughput = throughput;
+    q.medium = mi + 1u;
+    q.bounce = bounce;
+    q.startOnSurface = false;
+    q.pending = true;
+    return q;
 }
 
 // ---- One camera path as a state machine: pathStep() advances it by one vertex ----
@@ -135,7 +186,7 @@ PathState beginPath(vec3 origin, vec3 dir, uint level) {
 
 // ---- A segment through a participating medium (medium.glsl): 0 reached the surface, 1 scattered
 // in the medium (the state is advanced to the next vertex), 2 the path ends ----
-uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng) {
+uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng, inout ShadowQuery shadow) {
     uint mi = s.medium - 1u;
     // The medium's own limit (its max_bounces, Tungsten's sampleDistance): no free flight after
     // more than max_bounces scattering events in a row.
@@ -152,11 +203,7 @@ uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng) {
     s.mediumScatters += 1u;
     // This vertex's phase-sampled ray will not be traced when the medium limit ends the path next.
     bool last = s.mediumScatters > sceneMedium(mi).maxBounces;
-    if (kLightSampling && kLightCount > 0u) {
-        uint crossings;
-        vec3 direct = sampleDirectMedium(p, s.dir, mi, !last, rng, crossings);
-        addContribution(s.result, v + crossings, s.throughput * direct, pmf, s.level);
-    }
+    if (kLightSampling && kLightCount > 0u) shadow = sampleDirectMedium(p, s.dir, mi, !last, s.throughput, v, rng);
     if (last) return 2u;
     // Phase sampling: the phase function is sampled exactly, so the weight is 1.
     float g = mediumPhaseG(mi);
@@ -180,7 +227,8 @@ uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng) {
 }
 
 // Traces the next ray of the path and scatters at the vertex it finds; false when the path ends.
-bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
+// A light sampled at the vertex leaves its shadow ray in `shadow` (pathStep traces it).
+bool pathScatter(inout PathState s, LevelPmf pmf, inout Rng rng, inout ShadowQuery shadow) {
     uint v = s.vertex;
     Hit hit;
     bool found = traceClosest(s.origin, s.dir, kInfinity, hit);
@@ -189,7 +237,7 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         // is bounded by its box, so a ray may leave the scene through it (Tungsten's voxel medium).
         bool gridMedium = kHasGrids && sceneMedium(s.medium - 1u).type == kMediumGrid;
         if (!found && !gridMedium) return false;
-        uint r = mediumStep(s, found ? hit.t : kInfinity, pmf, rng);
+        uint r = mediumStep(s, found ? hit.t : kInfinity, pmf, rng, shadow);
         if (r == 1u) return true;
         if (r == 2u) return false;
     }
@@ -278,10 +326,8 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     if (m.type == kBsdfLambert) {
         if (!front && !kTwoSided) return false;
         if (kLightSampling && kLightCount > 0u) {
-            uint crossings;
             uint shadowMedium = kHasMedia ? mediumAcross(hit.prim, ng, -s.dir, s.medium) : 0u;
-            vec3 direct = sampleDirectLambert(p, ng, n, m.albedo, shadowMedium, rng, crossings);
-            addContribution(s.result, v + crossings, s.throughput * direct, pmf, s.level);
+            shadow = sampleDirectLambert(p, ng, n, m.albedo, s.throughput, shadowMedium, v, rng);
         }
         float u1 = rngNext(rng), u2 = rngNext(rng);
         s.dir = sampleCosineHemisphere(n, u1, u2);
@@ -310,11 +356,8 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
         vec3 t, b;
         buildFrame(nf, t, b);
         vec3 wi = vec3(dot(-s.dir, t), dot(-s.dir, b), dot(-s.dir, nf));
-        if (kLightSampling && kLightCount > 0u) {
-            uint crossings;
-            vec3 direct = sampleDirectGlossy(p, ng, nf, t, b, wi, m, hit.prim, s.medium, rng, crossings);
-            addContribution(s.result, v + crossings, s.throughput * direct, pmf, s.level);
-        }
+        if (kLightSampling && kLightCount > 0u)
+            shadow = sampleDirectGlossy(p, ng, nf, t, b, wi, m, hit.prim, s.throughput, s.medium, v, rng);
         vec3 wo, weight;
         float pdf;
         bool specular;
@@ -355,4 +398,18 @@ bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
     }
     if (kHasMedia || kHasPassThrough) s.lastVertex = p;
     return true;
+}
+
+// One step of the path: the vertex's scattering (pathScatter), then the shadow ray of the light it
+// sampled, if any; false when the path ends. The shadow ray's random numbers (stochastic
+// transmittance estimators, thin sheets) are drawn after the vertex's own.
+bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
+    ShadowQuery shadow = noShadowQuery();
+    bool more = pathScatter(s, pmf, rng, shadow);
+    if (shadow.pending) {
+        uint crossings;
+        vec3 direct = traceShadowQuery(shadow, rng, crossings);
+        addContribution(s.result, shadow.bounce + crossings, direct, pmf, s.level);
+    }
+    return more;
 }

@@ -12,6 +12,18 @@
 #ifndef TR_FORM
 #define TR_FORM trForm  // the includer may fold in the scene's model (shared/transmittance_estimators.h)
 #endif
+#ifndef TR_FORM3
+#define TR_FORM3 trForm3
+#endif
+// The includer may also fold out sampleGuideDepth's code for models its scene lacks: TR_GUIDE_HAS(t)
+// false (a constant) for a model type t no medium uses, TR_GUIDE_BISECTION false when every model
+// present has a closed form there.
+#ifndef TR_GUIDE_HAS
+#define TR_GUIDE_HAS(t) true
+#endif
+#ifndef TR_GUIDE_BISECTION
+#define TR_GUIDE_BISECTION true
+#endif
 
 SHADER_NAMESPACE_BEGIN
 
@@ -33,31 +45,44 @@ FN float sampleDiracDepth(TrModel m, float u) {
 // the Dirac flights of linear and pulse, it returns the step). The bisection costs about 40
 // evaluations of F per flight, which was most of the render time of the non-exponential scene.
 FN float sampleGuideDepth(TrModel model, bool fromSurface, float u) {
-    if (model.type == kTrExponential) return -log(1.0f - u);
-    if (model.type == kTrDavis) {
-        float a = model.a.x;
-        return a * (pow(1.0f - u, -1.0f / (fromSurface ? a : a + 1.0f)) - 1.0f);
+    if (TR_GUIDE_HAS(kTrExponential)) {
+        if (model.type == kTrExponential) return -log(1.0f - u);
     }
-    if (model.type == kTrLinear) return fromSurface ? model.a.x * u : model.a.x;  // F = 1 - tau/m; a step at m
-    if (model.type == kTrQuadratic) {  // F = (1 - tau/m)^2 from a surface, 1 - tau/m from a medium point
-        float s = fromSurface ? sqrt(1.0f - u) : 1.0f - u;
-        return model.a.x * (1.0f - s);
+    if (TR_GUIDE_HAS(kTrDavis)) {
+        if (model.type == kTrDavis) {
+            float a = model.a.x;
+            return a * (pow(1.0f - u, -1.0f / (fromSurface ? a : a + 1.0f)) - 1.0f);
+        }
     }
-    if (model.type == kTrPulse && fromSurface) {
-        // T_ss = 1 - (2/n) (I(x) - 1/2), I piecewise linear with I(i) = i - i (i - 1) / (2n) at the
-        // integers (shared/transmittance.h, trPulseG): solve I(x) = 1/2 + n u / 2 on its piece.
-        float n = model.a.z, target = 0.5f + 0.5f * n * u;
-        float b2 = 2.0f * n + 1.0f;
-        float i = clamp(floor(0.5f * (b2 - sqrt(max(b2 * b2 - 8.0f * n * target, 0.0f)))), 0.0f, n - 1.0f);
-        float x = i + (target - (i - i * (i - 1.0f) / (2.0f * n))) / (1.0f - i / n);
-        return max(model.a.x + (x - 0.5f) * (model.a.y - model.a.x) / n, 0.0f);
+    if (TR_GUIDE_HAS(kTrLinear)) {
+        if (model.type == kTrLinear) return fromSurface ? model.a.x * u : model.a.x;  // F = 1 - tau/m; a step at m
     }
-    if (model.type == kTrDoubleExponential) {
-        float a = model.a.x, b = model.a.y;
-        float wa = fromSurface ? 0.5f : a / (a + b);
-        if (u < wa) return -log(1.0f - u / wa) / a;
-        return -log(1.0f - (u - wa) / (1.0f - wa)) / b;
+    if (TR_GUIDE_HAS(kTrQuadratic)) {
+        if (model.type == kTrQuadratic) {  // F = (1 - tau/m)^2 from a surface, 1 - tau/m from a medium point
+            float s = fromSurface ? sqrt(1.0f - u) : 1.0f - u;
+            return model.a.x * (1.0f - s);
+        }
     }
+    if (TR_GUIDE_HAS(kTrPulse)) {
+        if (model.type == kTrPulse && fromSurface) {
+            // T_ss = 1 - (2/n) (I(x) - 1/2), I piecewise linear with I(i) = i - i (i - 1) / (2n) at the
+            // integers (shared/transmittance.h, trPulseG): solve I(x) = 1/2 + n u / 2 on its piece.
+            float n = model.a.z, target = 0.5f + 0.5f * n * u;
+            float b2 = 2.0f * n + 1.0f;
+            float i = clamp(floor(0.5f * (b2 - sqrt(max(b2 * b2 - 8.0f * n * target, 0.0f)))), 0.0f, n - 1.0f);
+            float x = i + (target - (i - i * (i - 1.0f) / (2.0f * n))) / (1.0f - i / n);
+            return max(model.a.x + (x - 0.5f) * (model.a.y - model.a.x) / n, 0.0f);
+        }
+    }
+    if (TR_GUIDE_HAS(kTrDoubleExponential)) {
+        if (model.type == kTrDoubleExponential) {
+            float a = model.a.x, b = model.a.y;
+            float wa = fromSurface ? 0.5f : a / (a + b);
+            if (u < wa) return -log(1.0f - u / wa) / a;
+            return -log(1.0f - (u - wa) / (1.0f - wa)) / b;
+        }
+    }
+    if (!TR_GUIDE_BISECTION) return 0.0f;  // no model of the includer's scene comes here
     uint form = fromSurface ? kFormSurfaceSurface : kFormSurfaceMedium;
     float target = 1.0f - u;
     float lo = 0.0f, hi = 1.0f;
@@ -94,8 +119,7 @@ FN bool sampleDiracFlight(TrModel model, vec3 sigmaT, vec3 sigmaS, float l, floa
         weight = pdf > 0.0f ? sigmaS * m / pdf : vec3(0.0f);
         return true;
     }
-    vec3 pass = vec3(TR_FORM(model, kFormSurfaceMedium, sigmaT.x * l), TR_FORM(model, kFormSurfaceMedium, sigmaT.y * l),
-                     TR_FORM(model, kFormSurfaceMedium, sigmaT.z * l));
+    vec3 pass = TR_FORM3(model, kFormSurfaceMedium, sigmaT * l);
     float pdf = (pass.x + pass.y + pass.z) / 3.0f;
     weight = pdf > 0.0f ? pass / pdf : vec3(0.0f);
     return false;

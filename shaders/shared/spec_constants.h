@@ -55,13 +55,14 @@
     X(kSpecTrPmfAlpha,       37, float, kTrPmfAlpha,       0.6666667,   "that pmf's exponent alpha") \
     X(kSpecCameraMedium,     38, uint,  kCameraMedium,     0u,          "the camera's medium index + 1, 0 = vacuum") \
     X(kSpecHasGrids,         39, bool,  kHasGrids,         false,       "voxel grid media present") \
-    X(kSpecTrModel,          40, uint,  kSceneTrModel,     0xffffffffu, "the transmittance model every medium shares, or 0xffffffff") \
+    X(kSpecTrModels,         40, uint,  kSceneTrModels,    0x1ffu,      "bit t set: some medium uses transmittance model t (kTr*; interpolated sets its two models' bits too)") \
     X(kSpecHasInhomogeneousMedia, 41, bool, kHasInhomogeneous, true,    "a medium whose density varies (exponential or grid)") \
     X(kSpecBruteForcePrims,  42, uint,  kBruteForcePrims,  0u,          "n > 0: rays test the scene's n primitives in turn, no BVH") \
     X(kSpecTrTaylorTerms,    43, uint,  kTrTaylorTerms,    1u,          "taylor: terms evaluated before the roulette") \
     X(kSpecTrTaylorPoints,   44, uint,  kTrTaylorPoints,   0u,          "taylor: points of each factor's comb (0: from the density bounds)") \
     X(kSpecRoulette,         45, bool,  kRoulette,         true,        "Russian roulette on path throughput (off in derivative renders)") \
     X(kSpecTrPilot,          46, bool,  kTrPilot,          false,       "transmittance pmf pilot: debiased marching at the level pc.pilotLevel") \
+    X(kSpecGreyMedia,        47, bool,  kGreyMedia,        false,       "every medium's sigma_t is grey (three equal channels): one transmittance serves all three") \
     X(kSpecPhotonEstimator,  48, uint,  kEstimator,        kPhotonBiased, "photon mapping: kPhotonBiased or kPhotonUnbiased") \
     X(kSpecPhotonKernel,     49, uint,  kKernel,           kKernelCone, "the gather kernel: kKernelCone, kKernelUniform, kKernelEpanechnikov") \
     X(kSpecPhotonSchedule,   50, uint,  kSchedule,         kLevelScheduleUniform, "how block levels are drawn: per pixel or per block index") \

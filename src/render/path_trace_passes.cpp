@@ -17,12 +17,24 @@ namespace telescope {
 // ---- Plan ----
 namespace {
 // The transmittance model type every medium shares (simple models only), else 0xffffffff.
-uint32_t sharedTransmittanceModel(const Scene& scene) {
-    if (scene.media.empty()) return 0;
-    uint32_t type = scene.media[0].transmittance.type;
-    for (const Medium& m : scene.media)
-        if (m.transmittance.type != type) return 0xffffffffu;
-    return type == shader::kTrInterpolated ? 0xffffffffu : type;
+// Bit t set where some medium uses transmittance model t (an interpolated model: its own bit and
+// its two models'); the shaders fold out the models whose bit is clear (medium.glsl).
+uint32_t transmittanceModelMask(const Scene& scene) {
+    uint32_t mask = scene.media.empty() ? 1u << shader::kTrExponential : 0u;
+    for (const Medium& m : scene.media) {
+        mask |= 1u << m.transmittance.type;
+        if (m.transmittance.type == shader::kTrInterpolated) mask |= 1u << m.transmittance.typeA | 1u << m.transmittance.typeB;
+    }
+    return mask;
+}
+
+// Every medium's sigma_t has three equal channels (as the shader computes it: sigma_a + sigma_s).
+bool greyMedia(const Scene& scene) {
+    for (const Medium& m : scene.media) {
+        const glm::vec3 t = m.sigmaA + m.sigmaS;
+        if (t.x != t.y || t.y != t.z) return false;
+    }
+    return true;
 }
 }  // namespace
 
@@ -154,7 +166,8 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecCameraMedium, uint32_t(scene.camera.medium + 1)},
         {kSpecHasGrids, f.grids},
         {kSpecHasInhomogeneousMedia, f.inhomogeneous},
-        {kSpecTrModel, sharedTransmittanceModel(scene)},
+        {kSpecTrModels, transmittanceModelMask(scene)},
+        {kSpecGreyMedia, greyMedia(scene)},
         // Lavapipe's loop cap: lanes carry their paths on (deviceSceneSpec sets it per device);
         // the queued schedule's lanes take items from a queue rebuilt every unit: no budget.
         {kSpecLoopBudget, plan.levelSchedule == LevelSchedule::Queued ? 0u : kDefaultLoopBudget},
