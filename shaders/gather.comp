@@ -12,7 +12,7 @@
 // dispatch each, see photon_gather.glsl); the last slice completes the pass.
 #version 460
 #extension GL_GOOGLE_include_directive : require
-#extension GL_EXT_control_flow_attributes : require  // [[unroll]]: photon_gather.glsl
+#extension GL_EXT_control_flow_attributes : require  // [[unroll]]: photon_gather.glsl, scene_geometry.glsl
 
 #include "shared/gpu_types.h"
 #include "shared/rng.h"

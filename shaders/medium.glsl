@@ -407,32 +407,29 @@ bool sampleMediumSegment(uint mi, vec3 o, vec3 d, float l, bool fromSurface, ino
     float mu = (trMaxComponent(sceneMedium(mi).sigmaS) > 0.0 || emits) ? trMaxComponent(whole.sigmaT) * guideDensity : 0.0;
     float sigmaBar = trSigmaBar(model);
     float u = rngNext(rng);
-    if (mu > 0.0 && whole.len > 0.0) {
-        float depth = sampleGuideDepth(model, fromSurface, u);
-        float t = t0 + depth / mu;
-        if (t < t0 + whole.len) {
-            // Scatter at t
-            float pdf = mu * sigmaBar * mediumForm(model, trFormOf(fromSurface, false), depth);
-            p = o + d * t;
-            vec3 sigmaS = sceneMedium(mi).sigmaS * mediumDensityAt(mi, p);
-            if (!(pdf > 0.0)) {
-                throughput = vec3(0.0);
-                return true;
-            }
-            vec3 w = mediumTransmittance(mi, o, d, t, fromSurface, false, rng) / pdf;
-            // Emission collected at the collision (Tungsten's voxel medium): the emission per unit
-            // length times T_{start,medium}(t) / pdf(t), an estimate of integral T e dt.
-            if (emits) emitted = throughput * w * gridEmissionAt(mi, p);
-            throughput *= sigmaS * sigmaBar * w;
-            return true;
-        }
-    }
-    // Pass to the surface at l
-    float pass = (mu > 0.0 && whole.len > 0.0) ? mediumForm(model, trFormOf(fromSurface, true), mu * whole.len) : 1.0;
-    if (!(pass > 0.0)) {
+    bool guided = mu > 0.0 && whole.len > 0.0;
+    float depth = guided ? sampleGuideDepth(model, fromSurface, u) : 0.0;
+    float t = t0 + depth / mu;
+    bool scatter = guided && t < t0 + whole.len;
+    // Both outcomes share one evaluation of the guide's form and one transmittance estimate (lanes
+    // with masks run every call site): scatter at t with density
+    //   pdf = mu sigmaBar F_{start,medium}(depth),
+    // or pass to the surface at l with probability F_{start,surface}(mu len) (1 without a guide).
+    float form = guided ? mediumForm(model, trFormOf(fromSurface, !scatter), scatter ? depth : mu * whole.len) : 1.0;
+    float pdf = scatter ? mu * sigmaBar * form : form;
+    if (scatter) p = o + d * t;
+    if (!(pdf > 0.0)) {
         throughput = vec3(0.0);
+        return scatter;
+    }
+    vec3 w = mediumTransmittance(mi, o, d, scatter ? t : l, fromSurface, !scatter, rng) / pdf;
+    if (!scatter) {
+        throughput *= w;
         return false;
     }
-    throughput *= mediumTransmittance(mi, o, d, l, fromSurface, true, rng) / pass;
-    return false;
+    // Emission collected at the collision (Tungsten's voxel medium): the emission per unit length
+    // times T_{start,medium}(t) / pdf(t), an estimate of integral T e dt.
+    if (emits) emitted = throughput * w * gridEmissionAt(mi, p);
+    throughput *= sceneMedium(mi).sigmaS * mediumDensityAt(mi, p) * sigmaBar * w;
+    return true;
 }

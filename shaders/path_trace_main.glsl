@@ -3,6 +3,7 @@
 // path_trace.comp and path_trace_glossy.comp (GLSL only; included after #version).
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_EXT_control_flow_attributes : require  // [[unroll]]: scene_geometry.glsl
 
 // The loop budget's counting (shared/lang.h; kLoopBudget, gLoopTicks and gLoopHardLimit are
 // declared below): every loop counts, only the long walks of media stop at the hard limit.

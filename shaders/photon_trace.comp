@@ -10,6 +10,7 @@
 // path tracer's depth k = M - 1); c >= 1, so vertices beyond M - 1 are not traced.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require  // [[unroll]]: scene_geometry.glsl
 #extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_vote : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require

@@ -132,47 +132,58 @@ bool sampleLight(vec3 p, inout Rng rng, out LightSample ls) {
     LightGpu light = sceneLight(li);
     float u1 = rngNext(rng), u2 = rngNext(rng);
     ls.pdf = 0.0;
-    if (light.type == kLightPoint) {
-        vec3 d = light.position - p;
-        ls.dist = length(d);
-        ls.wi = d / ls.dist;
-        ls.weight = light.radiance / (ls.dist * ls.dist * light.pmf);
-    } else if (light.type == kLightCap) {
-        // Uniform in the cone of directions (Tungsten's infinite_sphere_cap)
-        ls.wi = sampleUniformCone(light.position, light.cosCap, u1, u2);
-        ls.dist = kInfinity;
-        ls.pdf = light.pmf / (2.0 * kPi * (1.0 - light.cosCap));
-        ls.weight = light.radiance / ls.pdf;
-    } else if (light.type == kLightEnvironment) {
-        ls.dist = kInfinity;
-#ifdef ENV_DATA
-        if (kEnvironmentMap) {
-            // Importance-sampled image (shared/environment_map.h, Tungsten's InfiniteSphere::sampleDirect)
-            vec2 uv;
-            float pdf;
-            if (!envSample(vec2(u1, u2), ls.wi, uv, pdf)) return false;
-            ls.pdf = light.pmf * pdf;
-            ls.weight = envLookup(uv) / ls.pdf;
+    // Each kind's code only where the scene has that kind (lanes with masks run every branch).
+    if (kHasPointLights) {
+        if (light.type == kLightPoint) {
+            vec3 d = light.position - p;
+            ls.dist = length(d);
+            ls.wi = d / ls.dist;
+            ls.weight = light.radiance / (ls.dist * ls.dist * light.pmf);
             return true;
         }
-#endif
-        ls.wi = sampleUniformSphere(u1, u2);
-        ls.pdf = light.pmf / (4.0 * kPi);
-        ls.weight = light.radiance / ls.pdf;
-    } else {
-        // Area light: a uniform point on the emissive prim.
-        Prim pr = BVH_PRIM(light.prim);
-        vec3 q, nq;
-        sampleEmitterPoint(pr, kHasSpheres, kHasDisks, u1, u2, q, nq);
-        vec3 d = q - p;
-        ls.dist = length(d);
-        ls.wi = d / max(ls.dist, 1e-30);
-        float cosL = -dot(ls.wi, nq);
-        if (cosL <= 0.0 || !(ls.dist > 0.0)) return false;
-        ls.pdf = areaLightPdf(li, pr.area, ls.dist, cosL);
-        ls.weight = light.radiance / ls.pdf;
-        ls.dist *= 1.0 - 1e-4;  // stop short of the light itself
     }
+    if (kCapLight != 0xffffffffu) {
+        if (light.type == kLightCap) {
+            // Uniform in the cone of directions (Tungsten's infinite_sphere_cap)
+            ls.wi = sampleUniformCone(light.position, light.cosCap, u1, u2);
+            ls.dist = kInfinity;
+            ls.pdf = light.pmf / (2.0 * kPi * (1.0 - light.cosCap));
+            ls.weight = light.radiance / ls.pdf;
+            return true;
+        }
+    }
+    if (kEnvironmentLight != 0xffffffffu) {
+        if (light.type == kLightEnvironment) {
+            ls.dist = kInfinity;
+#ifdef ENV_DATA
+            if (kEnvironmentMap) {
+                // Importance-sampled image (shared/environment_map.h, Tungsten's InfiniteSphere::sampleDirect)
+                vec2 uv;
+                float pdf;
+                if (!envSample(vec2(u1, u2), ls.wi, uv, pdf)) return false;
+                ls.pdf = light.pmf * pdf;
+                ls.weight = envLookup(uv) / ls.pdf;
+                return true;
+            }
+#endif
+            ls.wi = sampleUniformSphere(u1, u2);
+            ls.pdf = light.pmf / (4.0 * kPi);
+            ls.weight = light.radiance / ls.pdf;
+            return true;
+        }
+    }
+    // Area light: a uniform point on the emissive prim.
+    Prim pr = BVH_PRIM(light.prim);
+    vec3 q, nq;
+    sampleEmitterPoint(pr, kHasSpheres, kHasDisks, u1, u2, q, nq);
+    vec3 d = q - p;
+    ls.dist = length(d);
+    ls.wi = d / max(ls.dist, 1e-30);
+    float cosL = -dot(ls.wi, nq);
+    if (cosL <= 0.0 || !(ls.dist > 0.0)) return false;
+    ls.pdf = areaLightPdf(li, pr.area, ls.dist, cosL);
+    ls.weight = light.radiance / ls.pdf;
+    ls.dist *= 1.0 - 1e-4;  // stop short of the light itself
     return true;
 }
 

@@ -20,20 +20,23 @@ layout(binding = kBindingPrimsTexels) uniform usamplerBuffer primTexels;
 // (docs/BENCHMARKS.photon-notes.md). The path tracer's brute-force loop did the same on scenes of
 // a few primitives (the furnace's one sphere: a new shader every dispatch, LeakSanitizer's
 // "indirect leaks" in registerEHFrames of the Stability tests; docs/TESTING.md "Sanitizers").
-// A zero the compiler cannot see (gl_NumWorkGroups.z is at least 1) keeps the offsets unknown:
-// - the path tracer adds it to the brute-force loop's trip count (BVH_BRUTE_FORCE_COUNT): the loop
-//   is no longer unrolled into constant offsets, and the loads keep the plain index. Measured
-//   3.6% more paths/s on Tungsten's Cornell box (18 primitives) than the hidden index below, with
-//   the same images; the furnace renders 16 and 2048 spp in the same resident memory (95 MB),
-//   where constant offsets grow it to 228 MB;
-// - photon_trace adds it to every index (SCENE_UNIFORM_INDEX_HIDDEN), as first done here.
-// BVH walks read nodes at data-dependent offsets: they keep the plain index in the path tracer.
+// A zero the compiler cannot see, added to every index, keeps the offsets unknown. Which zero
+// decides how lavapipe loads: an offset built from constants and push constants alone is one
+// scalar load for all lanes, any other offset (a loop counter, gl_NumWorkGroups) a gather that
+// loads each lane's value of each component apart (16 loads a lane for a Prim).
+// - the path tracer adds pc.width >> 31 (its push constants; images are narrower than 2^31) and
+//   unrolls the brute-force loops (BVH_UNROLL): each primitive is read by scalar loads. Against a
+//   loop whose trip count hid a zero from gl_NumWorkGroups (gathers), taking turns, 2026-12-06:
+//   Tungsten's Cornell box 4.65 -> 6.15 and 5.40 -> 7.13 M paths/s at 128 spp, its volumetric
+//   caustic (8 primitives) 2.3 -> 3.1 M, the images bit-identical; the furnace renders 16 and
+//   2048 spp in the same resident memory (95.5 MB), where plain constant offsets grew it to 228 MB;
+// - photon_trace adds gl_NumWorkGroups.z == 0 (SCENE_UNIFORM_INDEX_HIDDEN), as first done here.
 // Stability.RepeatedPassesDoNotGrowTheProcess checks both.
 uint uniformIndex(uint i) {
 #ifdef SCENE_UNIFORM_INDEX_HIDDEN
     return i + uint(gl_NumWorkGroups.z == 0u);
 #else
-    return i;
+    return i + (pc.width >> 31u);
 #endif
 }
 
@@ -65,7 +68,6 @@ Prim scenePrim(uint i) {
 #define BVH_NODE(i) sceneNode(i)
 #define BVH_PRIM(i) scenePrim(i)
 #define BVH_BRUTE_FORCE_PRIMS kBruteForcePrims
-#ifndef SCENE_UNIFORM_INDEX_HIDDEN
-#define BVH_BRUTE_FORCE_COUNT (kBruteForcePrims + uint(gl_NumWorkGroups.z == 0u))
-#endif
+#define BVH_BRUTE_FORCE_CURVED kBruteForceCurved
+#define BVH_UNROLL [[unroll]]  // GL_EXT_control_flow_attributes (every includer enables it)
 #include "shared/intersect.h"

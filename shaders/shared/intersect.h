@@ -9,8 +9,10 @@
 //   BVH_COUNT_NODE_VISIT()   optional: a statement run once per node entered (a test counter),
 //   BVH_BRUTE_FORCE_PRIMS    optional: a constant n > 0 tests the n primitives one after the other
 //                            instead of walking the tree (tiny scenes; see kSpecBruteForcePrims);
-//   BVH_BRUTE_FORCE_COUNT    optional: the loop's trip count, equal to BVH_BRUTE_FORCE_PRIMS but
-//                            possibly hidden from the compiler (scene_geometry.glsl says why).
+//   BVH_BRUTE_FORCE_CURVED   optional, with it: a constant whose bit i is set where slot i is a
+//                            sphere or disk: the planar slots are tested by the planar test alone,
+//                            the curved ones after them;
+//   BVH_UNROLL               optional: the brute-force loops' attribute ([[unroll]] in GLSL).
 // Part 2 has internal linkage in C++, so each translation unit binds its own buffers.
 //
 // Rays are origin + t dir with dir non-zero (not necessarily unit); hits count for t strictly
@@ -186,9 +188,10 @@ SHADER_NAMESPACE_END
 #ifndef BVH_BRUTE_FORCE_PRIMS
 #define BVH_BRUTE_FORCE_PRIMS 0u
 #endif
-#ifndef BVH_BRUTE_FORCE_COUNT
-#define BVH_BRUTE_FORCE_COUNT BVH_BRUTE_FORCE_PRIMS
+#ifndef BVH_UNROLL
+#define BVH_UNROLL
 #endif
+
 
 #ifdef __cplusplus
 #define TRACE_FN static inline
@@ -253,7 +256,38 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
     if (BVH_BRUTE_FORCE_PRIMS > 0u) {
         // Every primitive in turn: a loop of constant length over uniform data, with no stack.
         LOOP_BUDGET_TICK(BVH_BRUTE_FORCE_PRIMS);
-        for (uint i = 0u; i < BVH_BRUTE_FORCE_COUNT; ++i) {
+#ifdef BVH_BRUTE_FORCE_CURVED
+        // SIMD lanes with masks (lavapipe) run every type's test for every primitive of a loop
+        // that dispatches on the type. Unrolled, each slot's kind is a constant: the planar slots
+        // get the planar test alone, then the few curved ones their own.
+        BVH_UNROLL for (uint i = 0u; i < BVH_BRUTE_FORCE_PRIMS; ++i) {
+            if (((BVH_BRUTE_FORCE_CURVED >> i) & 1u) == 0u) {
+                Prim p = BVH_PRIM(i);
+                float t = 0.0f;
+                vec2 bary = vec2(0.0f);
+                if (intersectPlanar(origin, dir, p.p0, p.p1, p.p2, p.type == kPrimQuad, 0.0f, hit.t, t, bary)) {
+                    hit.t = t;
+                    hit.prim = i;
+                    hit.bary = bary;
+                    if (anyHit) return true;
+                }
+            }
+        }
+        BVH_UNROLL for (uint i = 0u; i < BVH_BRUTE_FORCE_PRIMS; ++i) {
+            if (((BVH_BRUTE_FORCE_CURVED >> i) & 1u) != 0u) {
+                float t = 0.0f;
+                vec2 bary = vec2(0.0f);
+                if (intersectPrim(BVH_PRIM(i), origin, dir, 0.0f, hit.t, t, bary)) {
+                    hit.t = t;
+                    hit.prim = i;
+                    hit.bary = bary;
+                    if (anyHit) return true;
+                }
+            }
+        }
+        return hit.prim != kNoPrim;
+#endif
+        for (uint i = 0u; i < BVH_BRUTE_FORCE_PRIMS; ++i) {
             float t = 0.0f;
             vec2 bary = vec2(0.0f);
             if (intersectPrim(BVH_PRIM(i), origin, dir, 0.0f, hit.t, t, bary)) {

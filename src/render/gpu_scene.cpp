@@ -357,6 +357,9 @@ GpuScene buildGpuScene(const Scene& scene) {
                           out.lights.size() <= shader::kMaxUniformLights && out.media.size() <= shader::kMaxUniformMedia;
     f.primCount = uint32_t(out.prims.size());
     f.bruteForcePrims = f.fitsUniforms && out.prims.size() <= shader::kMaxBruteForcePrims ? uint32_t(out.prims.size()) : 0u;
+    static_assert(shader::kMaxBruteForcePrims <= 32u, "kSpecBruteForceCurved holds a bit per brute-force slot");
+    for (uint32_t i = 0; i < f.bruteForcePrims; ++i)
+        if (out.prims[i].type == shader::kPrimSphere || out.prims[i].type == shader::kPrimDisk) f.bruteForceCurved |= 1u << i;
     return out;
 }
 

@@ -136,6 +136,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecHasDisks, f.disks},
         {kSpecHasSpecular, f.specular},
         {kSpecLightCount, f.lightCount},
+        {kSpecPointLights, f.pointLights},
         {kSpecLightSampling, in.enableLightSampling && f.lightCount > 0},
         {kSpecTwoSided, in.enableTwoSidedShading},
         {kSpecFilter, filterConstant(scene.camera)},
@@ -150,6 +151,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecSceneInUniforms, f.fitsUniforms},
         {kSpecSceneTexels, 1u},  // (where the uniform scene is not read) off beyond the device's texel limit
         {kSpecBruteForcePrims, f.bruteForcePrims},
+        {kSpecBruteForceCurved, f.bruteForceCurved},
         {kSpecTablesInUniforms, f.tablesFitUniforms},
         {kSpecBsdfFamilies, f.bsdfFamilies},
         {kSpecHasTextures, f.textures},

@@ -174,6 +174,7 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         {kSpecHasDisks, f.disks},
         {kSpecHasSpecular, f.specular},
         {kSpecLightCount, f.lightCount},
+        {kSpecPointLights, f.pointLights},
         {kSpecTwoSided, in.enableTwoSidedShading},
         {kSpecFilter, filterConstant(scene.camera)},
         {kSpecRayEpsilon, gpu::specFloat(1e-5f * f.sceneExtent)},
@@ -189,6 +190,7 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         {kSpecSceneTexels, 1u},  // (where the uniform scene is not read) off beyond the device's texel limit
         {kSpecTablesInUniforms, f.tablesFitUniforms},
         {kSpecBruteForcePrims, f.bruteForcePrims},
+        {kSpecBruteForceCurved, f.bruteForceCurved},
         {kSpecSmoothNormals, f.smoothNormals},
         {kSpecBsdfFamilies, f.bsdfFamilies},
         {kSpecHasTextures, f.textures},
