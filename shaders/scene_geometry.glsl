@@ -70,4 +70,7 @@ Prim scenePrim(uint i) {
 #define BVH_BRUTE_FORCE_PRIMS kBruteForcePrims
 #define BVH_BRUTE_FORCE_CURVED kBruteForceCurved
 #define BVH_UNROLL [[unroll]]  // GL_EXT_control_flow_attributes (every includer enables it)
+// BVH walks whose stack fits kMaxRegisterBvhStack entries keep it in registers (shared/intersect.h).
+#define BVH_STACK_LENGTH (kBvhStackNeed != 0u ? kBvhStackNeed : kBvhStackSize)
+#define BVH_STACK_IN_REGISTERS (kBvhStackNeed != 0u)
 #include "shared/intersect.h"

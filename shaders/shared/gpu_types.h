@@ -202,6 +202,8 @@ FN uint continuationFlagBytes(uint lanes) { return (lanes * 4u + 15u) & ~15u; }
 // The largest scene traced primitive by primitive (kSpecBruteForcePrims; break-even ~24:
 // docs/BENCHMARKS.md).
 CONST uint kMaxBruteForcePrims = 20u;
+// The largest BVH walk stack the path tracer keeps in registers (kSpecBvhStackNeed).
+CONST uint kMaxRegisterBvhStack = 16u;
 // The transmittance pilot's (kSpecTrPilot) pc.pilotLevel bit: the correction weighted by 2, not 1.
 CONST uint kTrPilotHalfWeight = 0x80000000u;
 

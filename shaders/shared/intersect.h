@@ -191,6 +191,36 @@ SHADER_NAMESPACE_END
 #ifndef BVH_UNROLL
 #define BVH_UNROLL
 #endif
+// The walk's stack: arrays of BVH_STACK_LENGTH entries, indexed at run time unless the includer
+// keeps them in registers (BVH_STACK_IN_REGISTERS, a constant, with BVH_STACK_LENGTH the walk's
+// most pending entries): then every access is unrolled into compare-and-select over the entries
+// (lavapipe keeps an array indexed at run time in memory it reads and writes one lane at a time).
+#ifndef BVH_STACK_LENGTH
+#define BVH_STACK_LENGTH kBvhStackSize
+#define BVH_STACK_IN_REGISTERS false
+#endif
+#define BVH_STACK_WRITE(i, r, t)                                                         \
+    if (BVH_STACK_IN_REGISTERS) {                                                        \
+        BVH_UNROLL for (uint k = 0u; k < BVH_STACK_LENGTH; ++k) if (k == (i)) {          \
+            stack[k] = (r);                                                              \
+            stackT[k] = (t);                                                             \
+        }                                                                                \
+    } else {                                                                             \
+        stack[i] = (r);                                                                  \
+        stackT[i] = (t);                                                                 \
+    }
+#define BVH_STACK_READ(i, r, t)                                                          \
+    if (BVH_STACK_IN_REGISTERS) {                                                        \
+        r = 0u;                                                                          \
+        t = kBoxMiss;                                                                    \
+        BVH_UNROLL for (uint k = 0u; k < BVH_STACK_LENGTH; ++k) if (k == (i)) {          \
+            r = stack[k];                                                                \
+            t = stackT[k];                                                               \
+        }                                                                                \
+    } else {                                                                             \
+        r = stack[i];                                                                    \
+        t = stackT[i];                                                                   \
+    }
 
 
 #ifdef __cplusplus
@@ -304,8 +334,8 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
     // speed; the cap probe catches what the estimate misses, gpu_types.h).
     LOOP_BUDGET_TICK(kRayLoopTicks);
     vec3 invDir = safeInverse(dir);
-    uint stack[kBvhStackSize];
-    float stackT[kBvhStackSize];
+    uint stack[BVH_STACK_LENGTH];
+    float stackT[BVH_STACK_LENGTH];
     uint sp = 0u;
     uint ref = 0u;  // the root
     while (true) {
@@ -340,18 +370,15 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
             if (t0 < kBoxMiss) {
                 // collapseBvh keeps the entries a walk can leave below kBvhStackSize
                 if (t3 < kBoxMiss) {
-                    stack[sp] = r3;
-                    stackT[sp] = t3;
+                    BVH_STACK_WRITE(sp, r3, t3);
                     ++sp;
                 }
                 if (t2 < kBoxMiss) {
-                    stack[sp] = r2;
-                    stackT[sp] = t2;
+                    BVH_STACK_WRITE(sp, r2, t2);
                     ++sp;
                 }
                 if (t1 < kBoxMiss) {
-                    stack[sp] = r1;
-                    stackT[sp] = t1;
+                    BVH_STACK_WRITE(sp, r1, t1);
                     ++sp;
                 }
                 ref = r0;
@@ -362,8 +389,11 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
         bool popped = false;
         while (sp > 0u && !popped) {
             --sp;
-            if (stackT[sp] <= hit.t) {
-                ref = stack[sp];
+            uint entry;
+            float entryT;
+            BVH_STACK_READ(sp, entry, entryT);
+            if (entryT <= hit.t) {
+                ref = entry;
                 popped = true;
             }
         }

@@ -209,6 +209,7 @@ GpuScene buildGpuScene(const Scene& scene) {
     f.sceneCentre = scene.geometry.empty() ? glm::vec3(0.0f) : 0.5f * (all.lo + all.hi);
     Bvh bvh = buildBvh(boxes);
     out.nodes = collapseBvh(bvh);
+    f.bvhStackNeed = bvhStackNeed(out.nodes);
 
     // ---- Prims and area lights ----
     std::vector<float> power;

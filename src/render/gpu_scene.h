@@ -33,6 +33,7 @@ struct SceneFeatures {
     uint32_t primCount = 0;        // primitive slots (a mesh's triangles count one each)
     uint32_t bruteForcePrims = 0;  // > 0: so few prims (in uniforms) that rays test them all, no BVH
     uint32_t bruteForceCurved = 0; // with bruteForcePrims: bit i set where prim slot i is a sphere or disk
+    uint32_t bvhStackNeed = 0;     // the BVH walk's most pending entries (bvhStackNeed)
     bool smoothNormals = false;  // some mesh triangle is smooth-shaded (kSpecSmoothNormals)
     bool textures = false;      // some material has a textured parameter
     uint32_t textureCount = 0;

@@ -91,8 +91,10 @@ std::vector<FeatureSwitch> sceneFeatureSwitches(const std::vector<gpu::SpecConst
         specSwitch(spec, "textures", kSpecHasTextures, "no textured materials"),
         specSwitch(spec, "smooth normals", kSpecSmoothNormals, "every triangle flat-shaded"),
         specSwitch(spec, "uniform scene", kSpecSceneInUniforms,
-                   "more than 1024 BVH nodes or 1024 primitives: read from uniform texel buffers (from storage "
-                   "buffers on devices whose texel limit the scene exceeds)"),
+                   f.fitsUniforms ? "BVH walks read the scene from uniform texel buffers, which lavapipe gathers faster (the "
+                                    "uniform scene serves brute-force rays)"
+                                  : "more than 1024 BVH nodes or 1024 primitives: read from uniform texel buffers (from "
+                                    "storage buffers on devices whose texel limit the scene exceeds)"),
         specSwitch(spec, "uniform tables", kSpecTablesInUniforms,
                    fmt::format("more than {} materials, {} lights or {} media: read from storage buffers",
                                kMaxUniformMaterials, kMaxUniformLights, kMaxUniformMedia)),
