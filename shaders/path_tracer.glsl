@@ -30,12 +30,13 @@ void addContribution(inout PathResult r, uint bounce, vec3 c, LevelPmf pmf, uint
 
 #include "scene_common.glsl"
 
-// ---- Next-event estimation: the light is sampled at the vertex, its shadow ray traced once ----
-// Each kind of vertex (Lambertian, glossy, medium) samples a light where it scatters and leaves a
-// shadow query; pathStep traces the query after the vertex's step, whatever kind left it. Lavapipe
-// runs every branch of a SIMD group with masks, so a walk written at each kind's call site cost a
-// whole traversal per site and step wherever the group's lanes held different kinds (media scenes:
-// medium and surface vertices side by side); one call site traces one.
+// ---- Next-event estimation: one light sample and one shadow ray a step, whatever the vertex ----
+// Lavapipe runs every branch of a SIMD group with masks, so a routine written at each kind of
+// vertex's call site cost its whole work per site and step wherever the group's lanes held
+// different kinds (media scenes: medium and surface vertices side by side). A Lambertian or medium
+// vertex leaves a light query (the three random numbers of its light sample drawn where it
+// scatters, as before); a glossy one samples its light itself and leaves a shadow query; pathStep
+// samples the light of a light query and traces the shadow ray, once for every kind.
 struct ShadowQuery {
     vec3 origin;
     vec3 dir;
@@ -87,25 +88,105 @@ vec3 traceShadowQuery(ShadowQuery q, inout Rng rng, out uint crossings) {
     return q.throughput * q.value;
 }
 
-// Next-event estimation from a Lambertian point p with normal n (facing the viewer), reached with
-// the given throughput as vertex `bounce`: one light picked by power, MIS against cosine sampling.
-// With media the shadow ray starts in `medium` (index + 1).
-ShadowQuery sampleDirectLambert(vec3 p, vec3 ng, vec3 n, vec3 albedo, vec3 throughput, uint medium, uint bounce,
-                                inout Rng rng) {
+// The light sample a Lambertian or medium vertex asks for: one light picked by power, MIS against
+// cosine or phase sampling.
+struct LightQuery {
+    vec3 p;           // the vertex
+    vec3 ng;          // surface: the geometric normal (the shadow ray's offset)
+    vec3 n;           // surface: the shading normal facing the viewer; medium: the path's direction
+    vec3 albedo;      // surface: the Lambertian albedo
+    vec3 throughput;  // the path's throughput at the vertex
+    vec3 u;           // the light sample's random numbers (lightSampleNumbers)
+    float g;          // medium: the phase function's g
+    uint medium;      // the medium the shadow ray starts in, index + 1 (0 = vacuum)
+    uint bounce;      // the vertex's bounce count
+    bool inMedium;    // a medium vertex (phase function), else a Lambertian surface
+    bool withMis;     // medium: false where the path ends here (no phase-sampled ray can find the light)
+    bool pending;
+};
+
+LightQuery noLightQuery() {
+    LightQuery q;
+    q.p = vec3(0.0);
+    q.ng = vec3(0.0, 0.0, 1.0);
+    q.n = vec3(0.0, 0.0, 1.0);
+    q.albedo = vec3(0.0);
+    q.throughput = vec3(0.0);
+    q.u = vec3(0.0);
+    q.g = 0.0;
+    q.medium = 0u;
+    q.bounce = 0u;
+    q.inMedium = false;
+    q.withMis = false;
+    q.pending = false;
+    return q;
+}
+
+// A Lambertian point p with normal n (facing the viewer) reached with the given throughput as
+// vertex `bounce`; with media the shadow ray starts in `medium` (index + 1).
+LightQuery lambertLightQuery(vec3 p, vec3 ng, vec3 n, vec3 albedo, vec3 throughput, uint medium, uint bounce,
+                             inout Rng rng) {
+    LightQuery q = noLightQuery();
+    q.p = p;
+    q.ng = ng;
+    q.n = n;
+    q.albedo = albedo;
+    q.throughput = throughput;
+    q.u = lightSampleNumbers(rng);
+    q.medium = medium;
+    q.bounce = bounce;
+    q.pending = true;
+    return q;
+}
+
+// A scattering point p in medium mi (index), the path travelling along dir.
+LightQuery mediumLightQuery(vec3 p, vec3 dir, uint mi, bool withMis, vec3 throughput, uint bounce, inout Rng rng) {
+    LightQuery q = noLightQuery();
+    q.p = p;
+    q.n = dir;
+    q.throughput = throughput;
+    q.u = lightSampleNumbers(rng);
+    q.g = mediumPhaseG(mi);
+    q.medium = mi + 1u;
+    q.bounce = bounce;
+    q.inMedium = true;
+    q.withMis = withMis;
+    q.pending = true;
+    return q;
+}
+
+// The light sample of a light query and its shadow ray.
+ShadowQuery sampleDirect(LightQuery l) {
     LightSample ls;
-    if (!sampleLight(p, rng, ls)) return noShadowQuery();
-    float cosS = dot(n, ls.wi);
+    if (!sampleLightWith(l.p, l.u, ls)) return noShadowQuery();
+    if (kHasMedia && l.inMedium) {
+        float phase = phaseHG(dot(l.n, ls.wi), l.g);
+        float mis = (l.withMis && ls.pdf > 0.0) ? powerHeuristic(ls.pdf, phase) : 1.0;
+        ShadowQuery q;
+        q.origin = l.p;
+        q.dir = ls.wi;
+        q.tMax = ls.dist;
+        q.value = ls.weight * phase * mis;
+        q.throughput = l.throughput;
+        q.medium = l.medium;
+        q.bounce = l.bounce;
+        q.startOnSurface = false;
+        q.pending = true;
+        return q;
+    }
+    float cosS = dot(l.n, ls.wi);
     if (cosS <= 0.0) return noShadowQuery();
     float mis = ls.pdf > 0.0 ? powerHeuristic(ls.pdf, cosS * kInvPi) : 1.0;
     vec3 value = ls.weight * cosS * mis;
     if (!any(greaterThan(value, vec3(0.0)))) return noShadowQuery();
-    return surfaceShadowQuery(p, ng, ls, albedo * kInvPi * value, throughput, medium, bounce);
+    return surfaceShadowQuery(l.p, l.ng, ls, l.albedo * kInvPi * value, l.throughput, l.medium, l.bounce);
 }
 
 #ifdef TELESCOPE_GLOSSY
-// Next-event estimation from a glossy material (shared/bsdf.h glossy*): as sampleDirectLambert, with
-// the BSDF evaluated in the local frame (t, b, n) for the viewer direction wi (local).
-// The shadow ray starts in the medium on the light's side of the surface (prim, current medium).
+// Next-event estimation from a glossy material (shared/bsdf.h glossy*): as sampleDirect's
+// Lambertian case, with the BSDF evaluated in the local frame (t, b, n) for the viewer direction wi
+// (local). The shadow ray starts in the medium on the light's side of the surface (prim, current
+// medium).
 ShadowQuery sampleDirectGlossy(vec3 p, vec3 ng, vec3 n, vec3 t, vec3 b, vec3 wi, MaterialGpu m, uint prim,
                                vec3 throughput, uint medium, uint bounce, inout Rng rng) {
     LightSample ls;
@@ -122,27 +203,6 @@ ShadowQuery sampleDirectGlossy(vec3 p, vec3 ng, vec3 n, vec3 t, vec3 b, vec3 wi,
 }
 
 #endif
-
-// Next-event estimation from a scattering point p in medium mi (index), travelling along dir:
-// the phase function instead of the BSDF, MIS against phase sampling (withMis false: the path ends
-// here, so no phase-sampled ray will find the light and light sampling takes the whole weight).
-ShadowQuery sampleDirectMedium(vec3 p, vec3 dir, uint mi, bool withMis, vec3 throughput, uint bounce, inout Rng rng) {
-    LightSample ls;
-    if (!sampleLight(p, rng, ls)) return noShadowQuery();
-    float phase = phaseHG(dot(dir, ls.wi), mediumPhaseG(mi));
-    float mis = (withMis && ls.pdf > 0.0) ? powerHeuristic(ls.pdf, phase) : 1.0;
-    ShadowQuery q;
-    q.origin = p;
-    q.dir = ls.wi;
-    q.tMax = ls.dist;
-    q.value = ls.weight * phase * mis;
-    q.throughput = throughput;
-    q.medium = mi + 1u;
-    q.bounce = bounce;
-    q.startOnSurface = false;
-    q.pending = true;
-    return q;
-}
 
 // ---- One camera path as a state machine: pathStep() advances it by one vertex ----
 // The compute pass interleaves samples: when a lane's path ends it starts its next sample at
@@ -186,7 +246,7 @@ PathState beginPath(vec3 origin, vec3 dir, uint level) {
 
 // ---- A segment through a participating medium (medium.glsl): 0 reached the surface, 1 scattered
 // in the medium (the state is advanced to the next vertex), 2 the path ends ----
-uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng, inout ShadowQuery shadow) {
+uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng, inout LightQuery light) {
     uint mi = s.medium - 1u;
     // The medium's own limit (its max_bounces, Tungsten's sampleDistance): no free flight after
     // more than max_bounces scattering events in a row.
@@ -203,7 +263,7 @@ uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng, inou
     s.mediumScatters += 1u;
     // This vertex's phase-sampled ray will not be traced when the medium limit ends the path next.
     bool last = s.mediumScatters > sceneMedium(mi).maxBounces;
-    if (kLightSampling && kLightCount > 0u) shadow = sampleDirectMedium(p, s.dir, mi, !last, s.throughput, v, rng);
+    if (kLightSampling && kLightCount > 0u) light = mediumLightQuery(p, s.dir, mi, !last, s.throughput, v, rng);
     if (last) return 2u;
     // Phase sampling: the phase function is sampled exactly, so the weight is 1.
     float g = mediumPhaseG(mi);
@@ -227,8 +287,8 @@ uint mediumStep(inout PathState s, float tHit, LevelPmf pmf, inout Rng rng, inou
 }
 
 // Traces the next ray of the path and scatters at the vertex it finds; false when the path ends.
-// A light sampled at the vertex leaves its shadow ray in `shadow` (pathStep traces it).
-bool pathScatter(inout PathState s, LevelPmf pmf, inout Rng rng, inout ShadowQuery shadow) {
+// The vertex's next-event estimation is left in `light` or, from a glossy vertex, `shadow`.
+bool pathScatter(inout PathState s, LevelPmf pmf, inout Rng rng, inout LightQuery light, inout ShadowQuery shadow) {
     uint v = s.vertex;
     Hit hit;
     bool found = traceClosest(s.origin, s.dir, kInfinity, hit);
@@ -237,7 +297,7 @@ bool pathScatter(inout PathState s, LevelPmf pmf, inout Rng rng, inout ShadowQue
         // is bounded by its box, so a ray may leave the scene through it (Tungsten's voxel medium).
         bool gridMedium = kHasGrids && sceneMedium(s.medium - 1u).type == kMediumGrid;
         if (!found && !gridMedium) return false;
-        uint r = mediumStep(s, found ? hit.t : kInfinity, pmf, rng, shadow);
+        uint r = mediumStep(s, found ? hit.t : kInfinity, pmf, rng, light);
         if (r == 1u) return true;
         if (r == 2u) return false;
     }
@@ -327,7 +387,7 @@ bool pathScatter(inout PathState s, LevelPmf pmf, inout Rng rng, inout ShadowQue
         if (!front && !kTwoSided) return false;
         if (kLightSampling && kLightCount > 0u) {
             uint shadowMedium = kHasMedia ? mediumAcross(hit.prim, ng, -s.dir, s.medium) : 0u;
-            shadow = sampleDirectLambert(p, ng, n, m.albedo, s.throughput, shadowMedium, v, rng);
+            light = lambertLightQuery(p, ng, n, m.albedo, s.throughput, shadowMedium, v, rng);
         }
         float u1 = rngNext(rng), u2 = rngNext(rng);
         s.dir = sampleCosineHemisphere(n, u1, u2);
@@ -400,12 +460,14 @@ bool pathScatter(inout PathState s, LevelPmf pmf, inout Rng rng, inout ShadowQue
     return true;
 }
 
-// One step of the path: the vertex's scattering (pathScatter), then the shadow ray of the light it
-// sampled, if any; false when the path ends. The shadow ray's random numbers (stochastic
-// transmittance estimators, thin sheets) are drawn after the vertex's own.
+// One step of the path: the vertex's scattering (pathScatter), then its light sample and shadow
+// ray, if any; false when the path ends. The shadow ray's random numbers (stochastic transmittance
+// estimators, thin sheets) are drawn after the vertex's own.
 bool pathStep(inout PathState s, LevelPmf pmf, inout Rng rng) {
+    LightQuery light = noLightQuery();
     ShadowQuery shadow = noShadowQuery();
-    bool more = pathScatter(s, pmf, rng, shadow);
+    bool more = pathScatter(s, pmf, rng, light, shadow);
+    if (light.pending) shadow = sampleDirect(light);
     if (shadow.pending) {
         uint crossings;
         vec3 direct = traceShadowQuery(shadow, rng, crossings);

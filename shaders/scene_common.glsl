@@ -127,10 +127,11 @@ struct LightSample {
     float pdf;
 };
 
-bool sampleLight(vec3 p, inout Rng rng, out LightSample ls) {
-    uint li = pickLight(rngNext(rng));
+// u: the light pick (x) and the point on it (y, z).
+bool sampleLightWith(vec3 p, vec3 u, out LightSample ls) {
+    uint li = pickLight(u.x);
     LightGpu light = sceneLight(li);
-    float u1 = rngNext(rng), u2 = rngNext(rng);
+    float u1 = u.y, u2 = u.z;
     ls.pdf = 0.0;
     // Each kind's code only where the scene has that kind (lanes with masks run every branch).
     if (kHasPointLights) {
@@ -186,6 +187,16 @@ bool sampleLight(vec3 p, inout Rng rng, out LightSample ls) {
     ls.dist *= 1.0 - 1e-4;  // stop short of the light itself
     return true;
 }
+
+// The three random numbers of a light sample, in the order sampleLight draws them.
+vec3 lightSampleNumbers(inout Rng rng) {
+    float u0 = rngNext(rng);
+    float u1 = rngNext(rng);
+    float u2 = rngNext(rng);
+    return vec3(u0, u1, u2);
+}
+
+bool sampleLight(vec3 p, inout Rng rng, out LightSample ls) { return sampleLightWith(p, lightSampleNumbers(rng), ls); }
 
 // ---- Shadow rays past pass-through surfaces ----
 // Thin sheets and transparency let shadow rays through (Tungsten's generalizedShadowRay
