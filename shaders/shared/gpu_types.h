@@ -202,6 +202,11 @@ FN uint continuationFlagBytes(uint lanes) { return (lanes * 4u + 15u) & ~15u; }
 // The largest scene traced primitive by primitive (kSpecBruteForcePrims; break-even ~24:
 // docs/BENCHMARKS.md).
 CONST uint kMaxBruteForcePrims = 20u;
+// The path tracer's own limit (unrolled loops of scalar loads against BVH walks over texels with
+// the stack in registers, 2026-12-06, taking turns, M paths/s: Tungsten's volumetric caustic, 8
+// primitives, 3.12-3.25 brute force against 1.78-2.10 BVH; its Cornell box, 18, 4.42-5.65 against
+// 5.75-6.09).
+CONST uint kMaxBruteForcePathPrims = 12u;
 // The largest BVH walk stack the path tracer keeps in registers (kSpecBvhStackNeed).
 CONST uint kMaxRegisterBvhStack = 16u;
 // The transmittance pilot's (kSpecTrPilot) pc.pilotLevel bit: the correction weighted by 2, not 1.

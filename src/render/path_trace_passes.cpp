@@ -124,6 +124,8 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
     if (f.bsdfFamilies != 0u)
         for (PlannedPass& p : plan.passes)
             if (p.kind == PassKind::PathTrace) p.shader = "path_trace_glossy";
+    // Brute-force rays in the path tracer for the smallest scenes alone (kMaxBruteForcePathPrims).
+    const uint32_t bruteForce = f.bruteForcePrims <= kMaxBruteForcePathPrims ? f.bruteForcePrims : 0u;
     plan.pathTraceSpec = {
         {kSpecMaxBounces, pathDepthK(in)},
         {kSpecMinBounces, in.minBounces},
@@ -152,10 +154,10 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         // at each lane's own index, which lavapipe gathers faster from texels (vector loads) than
         // from a uniform buffer (a load per component): non-exponential 256x256, 64 spp, taking
         // turns, 1.51 / 1.73, 1.65 / 1.88, 1.74 / 2.02 M paths/s (uniform / texels), 2026-12-06.
-        {kSpecSceneInUniforms, f.fitsUniforms && f.bruteForcePrims > 0},
+        {kSpecSceneInUniforms, f.fitsUniforms && bruteForce > 0},
         {kSpecSceneTexels, 1u},  // (where the uniform scene is not read) off beyond the device's texel limit
-        {kSpecBruteForcePrims, f.bruteForcePrims},
-        {kSpecBruteForceCurved, f.bruteForceCurved},
+        {kSpecBruteForcePrims, bruteForce},
+        {kSpecBruteForceCurved, bruteForce > 0 ? f.bruteForceCurved : 0u},
         {kSpecBvhStackNeed, f.bvhStackNeed <= kMaxRegisterBvhStack ? std::max(f.bvhStackNeed, 1u) : 0u},
         {kSpecTablesInUniforms, f.tablesFitUniforms},
         {kSpecBsdfFamilies, f.bsdfFamilies},

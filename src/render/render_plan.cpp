@@ -99,8 +99,9 @@ std::vector<FeatureSwitch> sceneFeatureSwitches(const std::vector<gpu::SpecConst
                    fmt::format("more than {} materials, {} lights or {} media: read from storage buffers",
                                kMaxUniformMaterials, kMaxUniformLights, kMaxUniformMedia)),
         specSwitch(spec, "brute-force rays", kSpecBruteForcePrims,
-                   fmt::format("BVH traversal over {} primitives (brute force takes at most {}, in uniform buffers)",
-                               f.primCount, kMaxBruteForcePrims),
+                   fmt::format("BVH traversal over {} primitives (brute force takes at most {} in the path tracer, {} "
+                               "in the photon passes, in uniform buffers)",
+                               f.primCount, kMaxBruteForcePathPrims, kMaxBruteForcePrims),
                    0, "every ray tests the scene's primitives in turn, no BVH walk"),
     };
 }
