@@ -231,6 +231,17 @@ SHADER_NAMESPACE_END
 
 SHADER_NAMESPACE_BEGIN
 
+// A sphere or disk primitive; each branch vanishes when its constant is false.
+TRACE_FN bool intersectCurved(Prim p, vec3 origin, vec3 dir, float tMin, float tMax, OUT(float) t) {
+    if (kHasSpheres) {
+        if (p.type == kPrimSphere) return intersectSphere(origin, dir, p.p0, p.p1.x, tMin, tMax, t);
+    }
+    if (kHasDisks) {
+        if (p.type == kPrimDisk) return intersectDisk(origin, dir, p.p0, p.p1.x, p.n, tMin, tMax, t);
+    }
+    return false;
+}
+
 // One primitive of any type (triangles and quads share one test); sphere and disk branches
 // vanish when their constant is false.
 TRACE_FN bool intersectPrim(Prim p, vec3 origin, vec3 dir, float tMin, float tMax, OUT(float) t,
@@ -238,14 +249,7 @@ TRACE_FN bool intersectPrim(Prim p, vec3 origin, vec3 dir, float tMin, float tMa
     bary = vec2(0.0f);
     if (p.type == kPrimTriangle || p.type == kPrimQuad)
         return intersectPlanar(origin, dir, p.p0, p.p1, p.p2, p.type == kPrimQuad, tMin, tMax, t, bary);
-    if (kHasSpheres) {
-        if (p.type == kPrimSphere) return intersectSphere(origin, dir, p.p0, p.p1.x, tMin, tMax, t);
-    }
-    if (kHasDisks) {
-        if (p.type == kPrimDisk)
-            return intersectDisk(origin, dir, p.p0, p.p1.x, p.n, tMin, tMax, t);
-    }
-    return false;
+    return intersectCurved(p, origin, dir, tMin, tMax, t);
 }
 
 // A box test's result for a child the ray misses (above every tMax a query passes, kInfinity).
@@ -306,11 +310,10 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
         BVH_UNROLL for (uint i = 0u; i < BVH_BRUTE_FORCE_PRIMS; ++i) {
             if (((BVH_BRUTE_FORCE_CURVED >> i) & 1u) != 0u) {
                 float t = 0.0f;
-                vec2 bary = vec2(0.0f);
-                if (intersectPrim(BVH_PRIM(i), origin, dir, 0.0f, hit.t, t, bary)) {
+                if (intersectCurved(BVH_PRIM(i), origin, dir, 0.0f, hit.t, t)) {
                     hit.t = t;
                     hit.prim = i;
-                    hit.bary = bary;
+                    hit.bary = vec2(0.0f);
                     if (anyHit) return true;
                 }
             }
