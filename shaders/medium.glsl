@@ -122,15 +122,9 @@ float mediumSimpleForm(uint type, vec4 p, uint form, float tau) {
     return exp(-tau);  // exponential: every form
 }
 float mediumForm(TrModel m, uint form, float tau) {
-    if (kSceneTrModel == kTrExponential) return exp(-max(tau, 0.0));
-    if (kSceneTrModel == kTrLinear) return trLinearForm(m.a, form, max(tau, 0.0));
-    if (kSceneTrModel == kTrQuadratic) return trQuadraticForm(m.a, form, max(tau, 0.0));
-    if (kSceneTrModel == kTrDoubleExponential) return trDoubleExponentialForm(m.a, form, max(tau, 0.0));
-    if (kSceneTrModel == kTrErlang) return trErlangForm(m.a, form, max(tau, 0.0));
-    if (kSceneTrModel == kTrDavis) return trDavisForm(m.a, form, max(tau, 0.0));
-    if (kSceneTrModel == kTrDavisWeinstein) return trDavisWeinsteinForm(m.a, form, max(tau, 0.0));
-    if (kSceneTrModel == kTrPulse) return trPulseForm(m.a, form, max(tau, 0.0));
-    if (!SCENE_HAS_TR_MODEL(kTrInterpolated)) return mediumSimpleForm(m.type, m.a, form, max(tau, 0.0));
+    // (With one model its type is a constant here too.)
+    if (!SCENE_HAS_TR_MODEL(kTrInterpolated))
+        return mediumSimpleForm(kSceneTrModel != 0xffffffffu ? kSceneTrModel : m.type, m.a, form, max(tau, 0.0));
     return trForm(m, form, tau);
 }
 vec3 mediumForm3(TrModel m, uint form, vec3 tau) {
