@@ -28,8 +28,8 @@ layout(binding = kBindingPrimsTexels) uniform usamplerBuffer primTexels;
 //   unrolls the brute-force loops (BVH_UNROLL): each primitive is read by scalar loads. Against a
 //   loop whose trip count hid a zero from gl_NumWorkGroups (gathers), taking turns, 2026-12-06,
 //   M paths/s at 128 spp: Tungsten's volumetric caustic (8 primitives) 2.30-2.43 -> 3.26-3.40
-//   (with the light sample once a step), its Cornell box (18) 5.45 -> 5.61, the images
-//   bit-identical; the furnace renders 16 and 2048 spp in the same resident memory (95.5 MB), where
+//   (with the light sample once a step), its Cornell box (18) 5.45 -> 5.61 (it walks the BVH now:
+//   kMaxBruteForcePathPrims), the images bit-identical; the furnace renders 16 and 2048 spp in the same resident memory (95.5 MB), where
 //   plain constant offsets grew it to 228 MB;
 // - photon_trace adds gl_NumWorkGroups.z == 0 (SCENE_UNIFORM_INDEX_HIDDEN), as first done here.
 // Stability.RepeatedPassesDoNotGrowTheProcess checks both.

@@ -222,7 +222,6 @@ SHADER_NAMESPACE_END
         t = stackT[i];                                                                   \
     }
 
-
 #ifdef __cplusplus
 #define TRACE_FN static inline
 #else

@@ -16,7 +16,6 @@ namespace telescope {
 
 // ---- Plan ----
 namespace {
-// The transmittance model type every medium shares (simple models only), else 0xffffffff.
 // Bit t set where some medium uses transmittance model t (an interpolated model: its own bit and
 // its two models'); the shaders fold out the models whose bit is clear (medium.glsl).
 uint32_t transmittanceModelMask(const Scene& scene) {
