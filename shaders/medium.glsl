@@ -130,7 +130,7 @@ float mediumForm(TrModel m, uint form, float tau) {
 vec3 mediumForm3(TrModel m, uint form, vec3 tau) {
     if (kSceneTrModel == kTrExponential) return exp(-tau);
     if (kGreyMedia) return vec3(mediumForm(m, form, tau.x));
-    if (kSceneTrModel != 0xffffffffu)
+    if (!SCENE_HAS_TR_MODEL(kTrInterpolated))  // the scene's models alone, as mediumForm
         return vec3(mediumForm(m, form, tau.x), mediumForm(m, form, tau.y), mediumForm(m, form, tau.z));
     return trForm3(m, form, tau);
 }
