@@ -31,12 +31,18 @@ std::string shaderDirectory();
 
 // The module with the specialisation constants' values frozen in and the code they make
 // unreachable removed (SPIRV-Tools: freeze, fold, constant propagation, dead branches, dead
-// functions). Lavapipe runs its NIR passes over the whole inlined module before it
-// folds specialisation constants, so handing it the specialised module cuts pipeline creation of
-// the path tracer from seconds to a tenth of a second (docs/BENCHMARKS.md). Returns false (and
-// leaves `out` empty) when the optimizer rejects the module; `error` then says why.
+// functions), then inlined, its single-store locals promoted and its dead code removed. Lavapipe
+// runs its NIR passes over the whole inlined module before it folds specialisation constants, so
+// handing it the specialised module cuts pipeline creation of the path tracer from seconds to a
+// tenth of a second, and the inlined one halves that again (docs/BENCHMARKS.md). Returns false
+// (and leaves `out` empty) when the optimizer rejects the module; `error` then says why.
 bool specialiseSpirv(const std::vector<uint32_t>& code, const std::vector<SpecConstant>& spec,
                      std::vector<uint32_t>& out, std::string* error = nullptr);
+
+// Whether a function of the module takes a buffer reference (a physical-storage-buffer pointer, or
+// a struct, array or pointer holding one) as a parameter: SPIRV-Tools 2023.1's aggressive
+// dead-code pass crashes on calls that pass them, so specialiseSpirv skips it for such modules.
+bool passesBufferReferences(const std::vector<uint32_t>& code);
 
 // Whether ComputePipeline specialises SPIR-V on the host (default) or passes the constants to the
 // driver (TELESCOPE_DRIVER_SPECIALISATION=1, for A/B measurements).

@@ -12,6 +12,8 @@
 
 #include <unistd.h>
 
+#include <spirv-tools/libspirv.hpp>
+
 #include "gpu/pipeline.h"
 #include "shared/gpu_types.h"
 
@@ -169,6 +171,58 @@ TEST_F(SpirvCache, OffWritesNothing) {
     std::vector<uint32_t> out;
     ASSERT_TRUE(gpu::specialiseSpirvCached("level_count", code_, spec_, out));
     EXPECT_TRUE(entries().empty());
+}
+
+size_t countOps(const std::vector<uint32_t>& code, uint32_t opcode) {
+    size_t n = 0;
+    for (size_t i = 5; i < code.size() && (code[i] >> 16) > 0; i += code[i] >> 16) n += (code[i] & 0xffffu) == opcode;
+    return n;
+}
+
+// Every shipped module comes out of the optimizer as valid SPIR-V: each with its constants'
+// defaults (the path tracer then inlined), and the path tracer with the queued level schedule and
+// with a loop budget, whose functions take and return buffer references (SPIRV-Tools 2023.1's
+// inliner leaves the locals carrying them undecorated, which the validator rejects, and its
+// dead-code pass crashes on calls passing them).
+TEST(SpecialiseSpirv, EveryShaderComesOutValidAndThePathTracerInlined) {
+    constexpr uint32_t kOpFunction = 54;
+    spvtools::SpirvTools tools(SPV_ENV_VULKAN_1_2);
+    std::string messages;
+    tools.SetMessageConsumer([&](spv_message_level_t, const char*, const spv_position_t&, const char* m) {
+        messages += std::string(m) + "\n";
+    });
+    spvtools::ValidatorOptions options;
+    options.SetScalarBlockLayout(true);
+    const auto check = [&](const fs::path& path, const std::vector<uint32_t>& code,
+                           const std::vector<gpu::SpecConstant>& spec) {
+        std::vector<uint32_t> out;
+        std::string error;
+        EXPECT_TRUE(gpu::specialiseSpirv(code, spec, out, &error)) << path << ": " << error;
+        messages.clear();
+        EXPECT_TRUE(tools.Validate(out.data(), out.size(), options)) << path << ": " << messages;
+        EXPECT_LE(countOps(out, kOpFunction), countOps(code, kOpFunction)) << path;
+        return out;
+    };
+    int modules = 0;
+    for (const auto& e : fs::directory_iterator(gpu::shaderDirectory())) {
+        if (e.path().extension() != ".spv") continue;
+        ++modules;
+        const std::vector<uint32_t> code = readWords(e.path());
+        const std::vector<uint32_t> out = check(e.path(), code, {});
+        if (e.path().stem() != "path_trace") continue;
+        EXPECT_LT(countOps(out, kOpFunction) * 4, countOps(code, kOpFunction)) << "the path tracer was not inlined";
+        check(e.path(), code, {{shader::kSpecDebiasMode, shader::kDebiasSingleTerm}, {shader::kSpecLevelSchedule, shader::kLevelScheduleQueued}});
+        check(e.path(), code, {{shader::kSpecLoopBudget, 4096u}});
+    }
+    EXPECT_GE(modules, 8);
+}
+
+// The check that keeps the dead-code pass away: the path tracer's unspecialised module passes
+// buffer references to functions (the pass crashes on it), the transmittance study's none.
+TEST(SpecialiseSpirv, FindsFunctionsTakingBufferReferences) {
+    const fs::path dir = gpu::shaderDirectory();
+    EXPECT_TRUE(gpu::passesBufferReferences(readWords(dir / "path_trace.spv")));
+    EXPECT_FALSE(gpu::passesBufferReferences(readWords(dir / "transmittance_study.spv")));
 }
 
 }  // namespace
