@@ -48,9 +48,10 @@ bool passesBufferReferences(const std::vector<uint32_t>& code);
 // driver (TELESCOPE_DRIVER_SPECIALISATION=1, for A/B measurements).
 bool hostSpecialisation();
 
-// specialiseSpirv through a cache of specialised modules on disk: the optimizer takes 65 ms of the
-// path tracer's 0.1 s of pipeline setup in every process (Tungsten's Cornell box), so a later
-// process reads the module it wrote instead (as Mesa caches what it compiles from the module).
+// specialiseSpirv through a cache of specialised modules on disk: with its inlining the optimizer
+// would take 0.12-0.22 s of every process (the path tracer on Tungsten's Cornell box, whose
+// pipeline setup is 0.05 s with the cache), so a later process reads the module it wrote instead
+// (as Mesa caches what it compiles from the module).
 // The directory is $TELESCOPE_CACHE_DIR, else $XDG_CACHE_HOME/telescope, else
 // $HOME/.cache/telescope; TELESCOPE_SPIRV_CACHE=0 turns the cache off. An entry repeats its whole
 // key (the input module's size and hash, the optimizer's version, every constant) and the hash of
