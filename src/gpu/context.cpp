@@ -71,11 +71,12 @@ VkInstance createInstance(bool validation, const std::vector<std::string>& extra
     VK_CHECK(r);
 #if defined(__SANITIZE_ADDRESS__)
     // Under AddressSanitizer: keep the drivers the loader opened mapped until the process ends.
-    // Drivers allocate some things once for the life of the process (lavapipe, on a Zen 3 CPU: its
-    // CPU-topology table, 128 bytes) and hold them in their globals; vkDestroyInstance unloads
-    // them, after which LeakSanitizer sees those blocks unreferenced and reports them from an
-    // "<unknown module>" that no suppression can name. Pinned, the blocks stay reachable, as in a
-    // process that never destroys its instance; a leak of ours is still reported.
+    // Drivers allocate some things once for the life of the process and hold them in their
+    // globals (lavapipe: 128 bytes in a pthread_once initialiser, seen on a Zen 3 machine and not on
+    // earlier ones); vkDestroyInstance unloads them, after which LeakSanitizer sees those blocks
+    // unreferenced and reports them from an "<unknown module>" that no suppression can name.
+    // Pinned, the blocks stay reachable, as in a process that never destroys its instance; a leak
+    // of ours is still reported.
     dl_iterate_phdr(
         [](dl_phdr_info* lib, size_t, void*) {
             if (lib->dlpi_name && *lib->dlpi_name)
