@@ -4,7 +4,8 @@
 // touches tens of megabytes once (lavapipe's NIR passes, the film's host copy, the EXR's
 // buffers); with 4 KiB pages each first touch is a page fault, and on the virtual machines this
 // was measured on a fault costs about 10 us: a 16-spp render of Tungsten's Cornell box spent 0.1 s
-// of its 0.45 s in them (docs/BENCHMARKS.startup-notes.md).
+// of its 0.45 s in them on 2026-12-06's machine; on a Zen 3 one the 2 MiB pages saved 2-8% of the
+// process (docs/BENCHMARKS.startup-notes.md).
 #ifdef TELESCOPE_MIMALLOC
 #include <sys/mman.h>
 

@@ -70,7 +70,8 @@ VkInstance createInstance(bool validation, const std::vector<std::string>& extra
         throw std::runtime_error("no Vulkan 1.2 driver found (Debian: apt-get install mesa-vulkan-drivers)");
     VK_CHECK(r);
 #if defined(__SANITIZE_ADDRESS__)
-    // Under AddressSanitizer: keep the drivers the loader opened mapped until the process ends.
+    // Under AddressSanitizer: keep every library loaded by now, the drivers and layers the loader
+    // opened among them, mapped until the process ends (repeat calls only repeat the pinning).
     // Drivers allocate some things once for the life of the process and hold them in their
     // globals (lavapipe: 128 bytes in a pthread_once initialiser, seen on a Zen 3 machine and not on
     // earlier ones); vkDestroyInstance unloads them, after which LeakSanitizer sees those blocks
