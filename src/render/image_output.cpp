@@ -65,6 +65,9 @@ void writeExr(const std::string& path, const Film& film, const ImageMetadata& me
     writeFileAtomically(path, [&](const std::string& tmp) {
         Imf::Header header(width, height);
         header.compression() = Imf::ZIP_COMPRESSION;
+        // zlib's fastest level: half the time of OpenEXR's default (4) for 2-3% more bytes (a
+        // 256x256 render's 18 channels: 17 against 33 ms, 519 against 505 KB; docs/BENCHMARKS.md).
+        header.zipCompressionLevel() = 1;
         for (const auto& [key, value] : metadata.entries) header.insert(key, Imf::StringAttribute(value));
         Imf::FrameBuffer frame;
         const size_t xStride = sizeof(float) * channels, yStride = xStride * size_t(width);
