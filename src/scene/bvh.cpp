@@ -22,7 +22,14 @@ float Aabb::area() const {
 namespace {
 
 constexpr uint32_t kBins = 16;
-constexpr float kTraversalCost = 1.0f;  // in units of one primitive test
+// The cost of visiting a node, in units of one primitive test, and (bvh.h) the most primitives a
+// leaf holds. A walk on SIMD lanes with masks (lavapipe) pays for a whole node visit, its
+// four box tests, sorting network and stack, on every iteration whichever lanes need it, so fewer
+// and fuller leaves win. Taking turns, 2026-12-07 (Zen 3 machine; M paths/s, medians of 5-8,
+// 256x256, leaf size / node cost): Tungsten's Cornell box (18 primitives) 3.2-3.7 with 4 / 1,
+// 3.6-4.9 with 8 / 4; its non-exponential scene (76) 1.17-1.21 -> 1.28-1.41; the water caustic's
+// photon passes (103k triangles) the same within noise (photon_trace 6.35-6.91 -> 6.28-7.09 s).
+constexpr float kTraversalCost = 4.0f;
 
 // Nodes from this depth on split at the object median. Each median split halves the count and
 // counts are below 2^32, so no leaf is deeper than kMedianDepth + 32 < kBvhStackSize: the far

@@ -36,8 +36,9 @@ struct Bvh {
     std::vector<uint32_t> order;  // leaf slot -> input primitive index
 };
 
-// Builds a binned-SAH BVH over the boxes. maxLeafSize bounds primitives per leaf.
-Bvh buildBvh(const std::vector<Aabb>& boxes, uint32_t maxLeafSize = 4);
+// Builds a binned-SAH BVH over the boxes. maxLeafSize bounds primitives per leaf (the default:
+// measured with the node cost, bvh.cpp kTraversalCost).
+Bvh buildBvh(const std::vector<Aabb>& boxes, uint32_t maxLeafSize = 8);
 
 // The tree the shaders walk (shared/gpu_types.h BvhNode, shared/intersect.h traceRay): each node
 // takes up to four children from the binary tree, expanding the largest inner child first, with
