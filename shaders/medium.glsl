@@ -313,10 +313,15 @@ vec3 mediumTransmittance(uint mi, vec3 o, vec3 d, float l, bool startOnSurface, 
 // The medium (index + 1) a ray continuing in dir is in after crossing prim with geometric normal ng:
 // the interior one on the back side of ng, the exterior one on the front side; prims without media
 // keep the current medium.
-uint mediumAcross(uint prim, vec3 ng, vec3 dir, uint current) {
-    uint packed = primMedia[prim];
+uint mediumAcrossPacked(uint packed, vec3 ng, vec3 dir, uint current) {
     if (packed == kPrimMediaNone) return current;
     return dot(dir, ng) < 0.0 ? (packed & 0xffffu) : (packed >> 16u);
+}
+// The same from prim's entry of primMedia. Lavapipe loads a storage buffer at lane-varying indices
+// in a loop over the lanes, so the path tracer reads a hit's entry once (primMediaOf) for all its uses.
+uint primMediaOf(uint prim) { return primMedia[prim]; }
+uint mediumAcross(uint prim, vec3 ng, vec3 dir, uint current) {
+    return mediumAcrossPacked(primMediaOf(prim), ng, dir, current);
 }
 
 // Transmittance along a shadow ray from o to o + tMax d: forward surfaces let it through (each

@@ -321,6 +321,7 @@ bool pathScatter(inout PathState s, LevelPmf pmf, inout Rng rng, inout LightQuer
     Prim pr = BVH_PRIM(hit.prim);
     vec3 p, ng;
     hitPoint(pr, s.origin, s.dir, hit.t, p, ng);
+    uint hitMedia = kHasMedia ? primMediaOf(hit.prim) : kPrimMediaNone;  // medium.glsl mediumAcross
 
     // Emission reached by the last BSDF sample (or seen by the camera).
     vec3 le = primEmission(pr, s.dir, ng);
@@ -338,7 +339,7 @@ bool pathScatter(inout PathState s, LevelPmf pmf, inout Rng rng, inout LightQuer
     if (kHasTextures) applyTextures(m, pr, hit.prim, hit.bary, p);
     if (kHasMedia && m.type == kBsdfForward) {
         // Invisible medium boundary: the ray goes on; the crossing counts as a bounce (Tungsten).
-        s.medium = mediumAcross(hit.prim, ng, s.dir, s.medium);
+        s.medium = mediumAcrossPacked(hitMedia, ng, s.dir, s.medium);
         s.origin = offsetRayOrigin(p, ng, s.dir);
         s.fromSurface = true;
         s.mediumScatters = 0u;
@@ -368,7 +369,7 @@ bool pathScatter(inout PathState s, LevelPmf pmf, inout Rng rng, inout LightQuer
         }
         if (pass) {
             if (kHasMedia) {
-                s.medium = mediumAcross(hit.prim, ng, s.dir, s.medium);
+                s.medium = mediumAcrossPacked(hitMedia, ng, s.dir, s.medium);
                 s.fromSurface = true;
                 s.mediumScatters = 0u;
             }
@@ -386,7 +387,7 @@ bool pathScatter(inout PathState s, LevelPmf pmf, inout Rng rng, inout LightQuer
     if (m.type == kBsdfLambert) {
         if (!front && !kTwoSided) return false;
         if (kLightSampling && kLightCount > 0u) {
-            uint shadowMedium = kHasMedia ? mediumAcross(hit.prim, ng, -s.dir, s.medium) : 0u;
+            uint shadowMedium = kHasMedia ? mediumAcrossPacked(hitMedia, ng, -s.dir, s.medium) : 0u;
             light = lambertLightQuery(p, ng, n, m.albedo, s.throughput, shadowMedium, v, rng);
         }
         float u1 = rngNext(rng), u2 = rngNext(rng);
@@ -452,7 +453,7 @@ bool pathScatter(inout PathState s, LevelPmf pmf, inout Rng rng, inout LightQuer
     s.origin = offsetRayOrigin(p, ng, s.dir);
     s.vertex = v + 1u;
     if (kHasMedia) {
-        s.medium = mediumAcross(hit.prim, ng, s.dir, s.medium);
+        s.medium = mediumAcrossPacked(hitMedia, ng, s.dir, s.medium);
         s.fromSurface = true;
         s.mediumScatters = 0u;
     }

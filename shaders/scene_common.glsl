@@ -234,7 +234,12 @@ vec3 shadowPass(Hit hit, inout vec3 o, vec3 d, inout float tMax, inout Rng rng, 
     Prim pr = BVH_PRIM(hit.prim);
     vec3 p = o + d * hit.t;
     ng = primNormalAt(pr, p);
-    vec3 tr = passThroughTransmittance(sceneMaterial(pr.material), abs(dot(d, ng)), rng);
+    // Without pass-through families only forward boundaries get here (shadowTransmittance stops at
+    // every other surface), and they pass everything: lanes with masks would otherwise run the
+    // material load and the nesting loop of passThroughTransmittance on every shadow ray (12% of
+    // the volumetric caustic's time, docs/BENCHMARKS.tungsten-notes.md).
+    vec3 tr = vec3(1.0);
+    if (kHasPassThrough) tr = passThroughTransmittance(sceneMaterial(pr.material), abs(dot(d, ng)), rng);
     o = offsetRayOrigin(p, ng, d);
     if (tMax < kInfinity) tMax = max(tMax - hit.t, 0.0);
     return tr;
