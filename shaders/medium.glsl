@@ -22,6 +22,7 @@ MediumGpu sceneMedium(uint i) {
 }
 layout(std430, binding = kBindingGridData) readonly buffer GridBuffer { float gridData[]; };
 layout(std430, binding = kBindingPrimMedia) readonly buffer PrimMediaBuffer { uint primMedia[]; };
+layout(std140, binding = kBindingPrimMediaUniform) uniform PrimMediaUniform { uvec4 uniformPrimMedia[kMaxUniformPrimMediaVec4s]; };
 
 // With only homogeneous media in the scene (kHasInhomogeneous false) the code of varying densities
 // folds away. Code a specialisation constant removes is gated by the constant alone (a nested `if`,
@@ -128,8 +129,8 @@ float mediumForm(TrModel m, uint form, float tau) {
     return trForm(m, form, tau);
 }
 vec3 mediumForm3(TrModel m, uint form, vec3 tau) {
-    if (kSceneTrModel == kTrExponential) return exp(-tau);
     if (kGreyMedia) return vec3(mediumForm(m, form, tau.x));
+    if (kSceneTrModel == kTrExponential) return exp(-tau);
     if (!SCENE_HAS_TR_MODEL(kTrInterpolated))  // the scene's models alone, as mediumForm
         return vec3(mediumForm(m, form, tau.x), mediumForm(m, form, tau.y), mediumForm(m, form, tau.z));
     return trForm3(m, form, tau);
@@ -318,8 +319,13 @@ uint mediumAcrossPacked(uint packed, vec3 ng, vec3 dir, uint current) {
     return dot(dir, ng) < 0.0 ? (packed & 0xffffu) : (packed >> 16u);
 }
 // The same from prim's entry of primMedia. Lavapipe loads a storage buffer at lane-varying indices
-// in a loop over the lanes, so the path tracer reads a hit's entry once (primMediaOf) for all its uses.
-uint primMediaOf(uint prim) { return primMedia[prim]; }
+// in a loop over the lanes (the hottest instructions of the volumetric caustic), so the entry comes
+// from the uniform copy where the scene has one, and the path tracer reads a hit's entry once
+// (primMediaOf) for all its uses.
+uint primMediaOf(uint prim) {
+    if (kSceneInUniforms) return uniformPrimMedia[prim >> 2u][prim & 3u];
+    return primMedia[prim];
+}
 uint mediumAcross(uint prim, vec3 ng, vec3 dir, uint current) {
     return mediumAcrossPacked(primMediaOf(prim), ng, dir, current);
 }

@@ -151,13 +151,19 @@ CONST uint kBindingShadingNormals = 14u;
 CONST uint kBindingBvhTexels = 15u;
 CONST uint kBindingPrimsTexels = 16u;
 CONST uint kBindingShadingNormalTexels = 17u;
-CONST uint kPathTraceBindingCount = 18u;
+// The prims' media (kBindingPrimMedia) again, as a uniform buffer of kUniformSceneBytes (uvec4s of
+// four prim slots), read with the uniform scene (kSpecSceneInUniforms: at most kMaxUniformPrims
+// slots). Lavapipe loads a storage buffer at lane-varying indices in a loop over the lanes that
+// stalls on every lane's store; from a uniform buffer the load is a gather.
+CONST uint kBindingPrimMediaUniform = 18u;
+CONST uint kPathTraceBindingCount = 19u;
 CONST uint kUniformSceneBytes = 65536u;  // maxUniformBufferRange on lavapipe; the Vulkan minimum is 16384
 CONST uint kMaxUniformNodes = 1024u;     // kUniformSceneBytes / sizeof(BvhNode)
 CONST uint kMaxUniformPrims = 1024u;     // kUniformSceneBytes / sizeof(Prim)
 CONST uint kMaxUniformMaterials = 682u;  // kUniformSceneBytes / sizeof(MaterialGpu), rounded down
 CONST uint kMaxUniformLights = 1365u;    // ... / sizeof(LightGpu)
 CONST uint kMaxUniformMedia = 273u;      // ... / sizeof(MediumGpu)
+CONST uint kMaxUniformPrimMediaVec4s = 4096u;  // ... / sizeof(uvec4)
 CONST uint kSceneBindingCount = 18u;     // photon_trace and gather: the scene only (4-6 and 13 unused; the gather's texels at 4)
 
 // Specialisation constants (ids, GLSL declarations): shared/spec_constants.h, included at the end.

@@ -39,7 +39,7 @@ Renderer::Renderer(gpu::Context& context, const ResolvedScene& resolved, uint32_
     lights_ = makeBuffer(gpuScene_.lights, "lights", shader::kUniformSceneBytes);
     media_ = makeBuffer(gpuScene_.media, "media", shader::kUniformSceneBytes);  // dummies without media
     gridData_ = makeBuffer(gpuScene_.gridData, "grid data");
-    primMedia_ = makeBuffer(gpuScene_.primMedia, "prim media");
+    primMedia_ = makeBuffer(gpuScene_.primMedia, "prim media", shader::kUniformSceneBytes);
     textures_ = makeBuffer(gpuScene_.textureData, "textures");  // a dummy without textures
     environment_ = makeBuffer(gpuScene_.environment, "environment");
     shadingNormals_ = makeBuffer(gpuScene_.shadingNormals, "shading normals");  // a dummy without smooth meshes

@@ -82,7 +82,7 @@ struct RenderBuffers {
     // texels at kBindingSortedTexels = kBindingMedia itself).
     std::vector<const gpu::Buffer*> sceneBindings(const gpu::Context& context, bool withMedia) const {
         using namespace shader;
-        std::vector<const gpu::Buffer*> list(kPathTraceBindingCount, nullptr);
+        std::vector<const gpu::Buffer*> list(withMedia ? kPathTraceBindingCount : kSceneBindingCount, nullptr);
         list[kBindingPrims] = prims;
         list[kBindingBvh] = nodes;
         list[kBindingMaterials] = materials;
@@ -101,6 +101,7 @@ struct RenderBuffers {
         list[kBindingBvhTexels] = texels(context, nodes);
         list[kBindingPrimsTexels] = texels(context, prims);
         list[kBindingShadingNormalTexels] = texels(context, shadingNormals);
+        if (withMedia) list[kBindingPrimMediaUniform] = primMedia;
         for (const gpu::Buffer* bound : list)
             if (!bound) throw std::logic_error("a scene binding without a buffer");
         return list;
@@ -132,8 +133,9 @@ constexpr uint32_t kSceneUniformBindings = (1u << shader::kBindingBvhUniform) | 
 // Their texel bindings (kBindingBvhTexels, kBindingPrimsTexels), and the shading normals'.
 constexpr uint32_t kSceneTexelBindings = (1u << shader::kBindingBvhTexels) | (1u << shader::kBindingPrimsTexels) |
                                          (1u << shader::kBindingShadingNormalTexels);
-// path_trace's: those, and the media (kSpecTablesInUniforms).
-constexpr uint32_t kPathTraceUniformBindings = kSceneUniformBindings | (1u << shader::kBindingMediaUniform);
+// path_trace's: those, the media (kSpecTablesInUniforms) and the prims' media (kSpecSceneInUniforms).
+constexpr uint32_t kPathTraceUniformBindings = kSceneUniformBindings | (1u << shader::kBindingMediaUniform) |
+                                               (1u << shader::kBindingPrimMediaUniform);
 
 // What an integrator counts beyond samples and dispatches (RenderStats::integrator).
 struct IntegratorCounters {
