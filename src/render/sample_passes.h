@@ -78,8 +78,10 @@ struct RenderBuffers {
     }
     // The scene's bindings of path_trace, photon_trace and gather, each slot by its name
     // (shared/gpu_types.h kBinding*). The photon passes declare no media (withMedia false): their
-    // slots hold the light table, a valid buffer no shader reads (the gather binds its photons'
-    // texels at kBindingSortedTexels = kBindingMedia itself).
+    // list is kSceneBindingCount long, one short of the path tracer's kPathTraceBindingCount (it
+    // leaves out kBindingPrimMediaUniform), and their media slots hold the light table, a valid
+    // buffer no shader reads (the gather binds its photons' texels at kBindingSortedTexels =
+    // kBindingMedia itself).
     std::vector<const gpu::Buffer*> sceneBindings(const gpu::Context& context, bool withMedia) const {
         using namespace shader;
         std::vector<const gpu::Buffer*> list(withMedia ? kPathTraceBindingCount : kSceneBindingCount, nullptr);
