@@ -7,7 +7,7 @@
 // program aborts. Memory that only the dynamic TLS blocks point to must not be reported: glibc
 // allocates the blocks from the dynamic loader, whose allocations LeakSanitizer keeps as roots.
 //
-//   threads_with_dynamic_tls LIBRARY [THREADS]
+//   threads_with_dynamic_tls LIBRARY [THREADS]   (exit 77: no block at page offset 16, nothing tested)
 #include <dlfcn.h>
 #include <pthread.h>
 
@@ -52,6 +52,12 @@ int main(int argc, char** argv) {
   std::printf("%d threads hold dynamic TLS, %d of the blocks at page offset 16\n", threads,
               atPageOffset16.load());
   std::fflush(stdout);  // before a crash at exit can lose it
+  if (atPageOffset16 == 0) {
+    // No block where the runtime misreads it: this run would pass whatever the options are.
+    // CTest lists it as skipped (SKIP_RETURN_CODE) rather than passed.
+    std::printf("skipped: no dynamic TLS block at page offset 16 on this machine\n");
+    return 77;
+  }
   // Returning runs the exit-time leak check with every thread alive and blocked.
   return 0;
 }
