@@ -237,8 +237,11 @@ public:
         : pipeline_(context, plannedEntry(plan, PassKind::PathTrace).shader, shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
                     deviceSceneSpec(context, plan.pathTraceSpec, b), kPathTraceUniformBindings, kSceneTexelBindings) {
         pipeline_.bindBuffers(b.sceneBindings(context, true));
-        for (const auto& s : plan.pathTraceSpec)
-            if (s.id == shader::kSpecLoopBudget && s.value != 0) loopBudget_ = deviceLoopBudget(context);
+        bool bruteForce = false;  // rays test every primitive (no BVH walk)
+        for (const auto& s : deviceSceneSpec(context, plan.pathTraceSpec, b)) {
+            if (s.id == shader::kSpecLoopBudget && s.value != 0) loopBudget_ = s.value;
+            if (s.id == shader::kSpecBruteForcePrims && s.value != 0) bruteForce = true;
+        }
         const Camera& cam = scene.camera;
         setPushCamera(push_, cam);
         push_.width = cam.width;
@@ -271,12 +274,27 @@ public:
         }
         groupsX_ = (cam.width + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
         groupsY_ = (cam.height + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
-        // About a million paths per dispatch, at most 16 samples per pixel in one thread.
+        // Samples per pixel in one dispatch (one thread per pixel, looping over its samples). On a
+        // CPU device, where rays are brute force, about four million paths, at most 64 samples per
+        // thread: lavapipe runs 8 lanes in step until the one with the most steps over all its
+        // samples is done, and the more samples a lane sums, the less the lanes' totals differ
+        // (and the dispatch's end comes fewer times): 1.10x the paths/s of 16 samples on the
+        // volumetric caustic, 1.09x on the Cornell box (docs/BENCHMARKS.tungsten-notes.md). Not
+        // where rays walk a BVH: 64 samples of those pass the loop budget, and carrying a third of
+        // the paths made Tungsten's water surface slower (0.79x, 0.96x). Elsewhere, and for
+        // renders stopped by time (an unfinished dispatch overshoots the limit), about a million
+        // paths, at most 16 samples.
         const uint64_t pixels = uint64_t(cam.width) * cam.height;
-        samplesPerUnit_ = uint32_t(std::clamp<uint64_t>((1u << 20) / std::max<uint64_t>(pixels, 1), 1, 16));
+        auto perDispatch = [&](uint64_t paths, uint64_t most) {
+            return uint32_t(std::clamp<uint64_t>(paths / std::max<uint64_t>(pixels, 1), 1, most));
+        };
+        samplesPerTimedUnit_ = perDispatch(uint64_t(1) << 20, 16);
+        // The level queue holds a unit's items (makeLevelQueue): it keeps the small unit.
+        const bool large = context.cpuDevice() && bruteForce && plan.levelSchedule != LevelSchedule::Queued;
+        samplesPerUnit_ = large ? perDispatch(uint64_t(1) << 22, 64) : samplesPerTimedUnit_;
         // $TELESCOPE_SAMPLES_PER_DISPATCH: a test knob (the loop budget's tests vary it).
         if (const char* v = std::getenv("TELESCOPE_SAMPLES_PER_DISPATCH"); v && *v)
-            samplesPerUnit_ = std::clamp<uint32_t>(uint32_t(std::strtoul(v, nullptr, 10)), 1, 1024);
+            samplesPerUnit_ = samplesPerTimedUnit_ = std::clamp<uint32_t>(uint32_t(std::strtoul(v, nullptr, 10)), 1, 1024);
         if (plan.levelSchedule == LevelSchedule::Queued) makeLevelQueue(context, plan, pixels * samplesPerUnit_);
     }
 
@@ -286,6 +304,7 @@ public:
     }
 
     uint32_t samplesPerUnit() const override { return samplesPerUnit_; }
+    uint32_t samplesPerTimedUnit() const override { return samplesPerTimedUnit_; }
     // A CommandBatch holds 64 dispatches x the passes of the integrator (see Renderer).
     uint32_t maxUnitsPerBatch() const override { return levelCount_ ? 12 : 64; }
 
@@ -422,7 +441,7 @@ private:
     // The drains' timing label: path_trace's, marked (the plan test counts it as path_trace).
     const std::string carriedLabel_ = std::string(passName(PassKind::PathTrace)) + " (carried)";
     shader::PathTracePush push_{};
-    uint32_t groupsX_ = 1, groupsY_ = 1, samplesPerUnit_ = 1;
+    uint32_t groupsX_ = 1, groupsY_ = 1, samplesPerUnit_ = 1, samplesPerTimedUnit_ = 1;
 };
 
 }  // namespace

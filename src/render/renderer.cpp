@@ -119,10 +119,10 @@ bool Renderer::restartWithCamera(const Camera& camera) {
 
 void Renderer::render(const RenderRequest& request) {
     const Camera& cam = camera_;
-    const uint32_t perUnit = passes_->samplesPerUnit();
     const double pixels = double(cam.width) * cam.height;
 
     const bool timed = request.timeLimit > 0.0;
+    const uint32_t perUnit = timed ? passes_->samplesPerTimedUnit() : passes_->samplesPerUnit();
     const auto start = Clock::now();
     uint64_t done = 0;
     uint32_t unitsPerBatch = 1;  // grows until a batch takes about a quarter second

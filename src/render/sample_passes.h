@@ -161,6 +161,9 @@ class SamplePasses {
 public:
     virtual ~SamplePasses() = default;
     virtual uint32_t samplesPerUnit() const = 0;
+    // The unit of a render stopped by time (whose sample count depends on the clock anyway):
+    // smaller where a unit is long, so that the render overshoots its limit by less.
+    virtual uint32_t samplesPerTimedUnit() const { return samplesPerUnit(); }
     virtual uint32_t maxUnitsPerBatch() const = 0;
     // Dispatches one unit records at most.
     virtual uint32_t dispatchesPerUnit() const { return 1; }
