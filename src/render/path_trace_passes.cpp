@@ -237,10 +237,10 @@ public:
         : pipeline_(context, plannedEntry(plan, PassKind::PathTrace).shader, shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
                     deviceSceneSpec(context, plan.pathTraceSpec, b), kPathTraceUniformBindings, kSceneTexelBindings) {
         pipeline_.bindBuffers(b.sceneBindings(context, true));
-        bool bruteForce = false;  // rays test every primitive (no BVH walk)
+        uint32_t bruteForcePrims = 0;  // > 0: rays test every primitive (no BVH walk)
         for (const auto& s : deviceSceneSpec(context, plan.pathTraceSpec, b)) {
             if (s.id == shader::kSpecLoopBudget && s.value != 0) loopBudget_ = s.value;
-            if (s.id == shader::kSpecBruteForcePrims && s.value != 0) bruteForce = true;
+            if (s.id == shader::kSpecBruteForcePrims) bruteForcePrims = s.value;
         }
         const Camera& cam = scene.camera;
         setPushCamera(push_, cam);
@@ -275,23 +275,28 @@ public:
         groupsX_ = (cam.width + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
         groupsY_ = (cam.height + shader::kPathTraceGroupSize - 1) / shader::kPathTraceGroupSize;
         // Samples per pixel in one dispatch (one thread per pixel, looping over its samples). On a
-        // CPU device, where rays are brute force, about four million paths, at most 64 samples per
-        // thread: lavapipe runs 8 lanes in step until the one with the most steps over all its
-        // samples is done, and the more samples a lane sums, the less the lanes' totals differ
-        // (and the dispatch's end comes fewer times): 1.10x the paths/s of 16 samples on the
-        // volumetric caustic, 1.09x on the Cornell box (docs/BENCHMARKS.tungsten-notes.md). Not
-        // where rays walk a BVH: 64 samples of those pass the loop budget, and carrying a third of
-        // the paths made Tungsten's water surface slower (0.79x, 0.96x). Elsewhere, and for
-        // renders stopped by time (an unfinished dispatch overshoots the limit), about a million
-        // paths, at most 16 samples.
+        // CPU device about four million paths, and as many samples per thread as the loop budget
+        // leaves room for (at most 64): lavapipe runs 8 lanes in step until the one with the most
+        // steps over all its samples is done, and the more samples a lane sums, the less the
+        // lanes' totals differ (and the dispatch's end comes fewer times). The room: paths of 8
+        // steps, each counting its own 8 ticks and two rays (brute force: a tick per primitive;
+        // a BVH walk: kRayLoopTicks), so 64 samples with brute-force rays, 28 with BVH walks.
+        // Measured against 16, interleaved (docs/BENCHMARKS.tungsten-notes.md): the volumetric
+        // caustic 1.10x paths/s at 64; the Cornell box 1.05x at 32, 1.14x at 64 (a few paths
+        // carried); Tungsten's water surface 1.03-1.12x at 32 but 0.79-0.96x at 64, where a
+        // third of its paths passed the budget and were carried. Elsewhere, and for renders
+        // stopped by time (an unfinished dispatch overshoots the limit), about a million paths,
+        // at most 16 samples.
         const uint64_t pixels = uint64_t(cam.width) * cam.height;
         auto perDispatch = [&](uint64_t paths, uint64_t most) {
             return uint32_t(std::clamp<uint64_t>(paths / std::max<uint64_t>(pixels, 1), 1, most));
         };
         samplesPerTimedUnit_ = perDispatch(uint64_t(1) << 20, 16);
+        const uint64_t stepTicks = 8 + 2 * uint64_t(bruteForcePrims ? bruteForcePrims : shader::kRayLoopTicks);
+        const uint64_t room = loopBudget_ ? std::clamp<uint64_t>(loopBudget_ / (8 * stepTicks), 16, 64) : 64;
         // The level queue holds a unit's items (makeLevelQueue): it keeps the small unit.
-        const bool large = context.cpuDevice() && bruteForce && plan.levelSchedule != LevelSchedule::Queued;
-        samplesPerUnit_ = large ? perDispatch(uint64_t(1) << 22, 64) : samplesPerTimedUnit_;
+        const bool large = context.cpuDevice() && plan.levelSchedule != LevelSchedule::Queued;
+        samplesPerUnit_ = large ? perDispatch(uint64_t(1) << 22, room) : samplesPerTimedUnit_;
         // $TELESCOPE_SAMPLES_PER_DISPATCH: a test knob (the loop budget's tests vary it).
         if (const char* v = std::getenv("TELESCOPE_SAMPLES_PER_DISPATCH"); v && *v)
             samplesPerUnit_ = samplesPerTimedUnit_ = std::clamp<uint32_t>(uint32_t(std::strtoul(v, nullptr, 10)), 1, 1024);
