@@ -417,6 +417,44 @@ TEST_F(Stability, BigMeshSameImageAtOneAndSixteenSamplesPerDispatch) {
     EXPECT_GT(control, 1e-2) << "another seed should differ";
 }
 
+// The path tracer's unit (samples per pixel in one dispatch) on CPU devices is as many samples
+// as the loop budget leaves room for, at most 64 (render/path_trace_passes.cpp): 64 with the
+// volumetric caustic's 8 brute-force primitives, 28 with BVH walks (Tungsten's water surface),
+// and nothing carried at either; renders stopped by time keep 16, as other devices do. Control:
+// 64 samples of the water surface pass the budget (paths carried), what the room avoids.
+TEST_F(Stability, DispatchUnitIsTheLoopBudgetsRoom) {
+    const bool cpu = sharedContext().cpuDevice();
+    const Scene bruteForce = loadTestScene("scenes/tungsten/volumetric-caustic/scene.json",
+                                           {{"integrator.type", R"("path_tracer")"}, {"camera.resolution", "[64,36]"}});
+    const Scene bvh = loadTestScene("scenes/tungsten/water-caustic/scene.json",
+                                    {{"integrator", R"({"type":"path_tracer","max_bounces":8})"},
+                                     {"camera.resolution", "[48,27]"}});
+    Film film;
+    RenderStats stats = renderWithStats(bruteForce, 128, 3, film);
+    expectLoopsComplete(stats);
+    EXPECT_EQ(stats.passes["path_trace"].dispatches, cpu ? 2u : 8u) << "brute force: 64 samples a dispatch on CPUs";
+    EXPECT_EQ(stats.loops.carried, 0u);
+    stats = renderWithStats(bvh, 84, 3, film);
+    expectLoopsComplete(stats);
+    EXPECT_EQ(stats.passes["path_trace"].dispatches, cpu ? 3u : 6u) << "BVH walks: 28 samples a dispatch on CPUs";
+    EXPECT_EQ(stats.loops.carried, 0u) << "the unit fits the budget";
+    {
+        Renderer renderer(sharedContext(), resolved(bruteForce), 3);
+        RenderRequest timed;
+        timed.timeLimit = 0.3;
+        renderer.render(timed);
+        const RenderStats& t = renderer.stats();
+        ASSERT_GT(t.samplesPerPixel, 0u);
+        EXPECT_EQ(t.samplesPerPixel, 16u * t.passes.at("path_trace").dispatches) << "a timed render's unit is 16 samples";
+    }
+    if (cpu) {
+        ScopedEnv env("TELESCOPE_SAMPLES_PER_DISPATCH", "64");
+        stats = renderWithStats(bvh, 84, 3, film);
+        expectLoopsComplete(stats);
+        EXPECT_GT(stats.loops.carried, 0u) << "64 samples of the water surface should pass the budget";
+    }
+}
+
 // Scenes too large for the uniform bindings read their BVH nodes, primitives and shading normals
 // through texel buffers (kSpecSceneTexels), or from storage buffers where the device's texel limit
 // is smaller than the scene (here forced by TELESCOPE_MAX_TEXELS): the same numbers either way, so
