@@ -282,9 +282,9 @@ public:
         // steps, each counting its own 8 ticks and two rays (brute force: a tick per primitive;
         // a BVH walk: kRayLoopTicks), so 64 samples with brute-force rays, 28 with BVH walks.
         // Measured against 16, interleaved (docs/BENCHMARKS.tungsten-notes.md): the volumetric
-        // caustic 1.10x paths/s at 64; the Cornell box 1.05x at 32, 1.14x at 64 (a few paths
+        // caustic 1.10x paths/s at 64; the Cornell box 1.12x at 28 (1.14x at 64, a few paths
         // carried); Tungsten's water surface 1.03-1.12x at 32 but 0.79-0.96x at 64, where a
-        // third of its paths passed the budget and were carried. Elsewhere, and for renders
+        // third of its paths passed the budget and were carried (Stability.DispatchUnitIsTheLoopBudgetsRoom). Elsewhere, and for renders
         // stopped by time (an unfinished dispatch overshoots the limit), about a million paths,
         // at most 16 samples.
         const uint64_t pixels = uint64_t(cam.width) * cam.height;
