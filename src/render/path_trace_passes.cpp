@@ -234,11 +234,16 @@ class PathTracePasses : public SamplePasses {
 public:
     PathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan, const RenderBuffers& b,
                     uint32_t seed)
+        : PathTracePasses(context, scene, plan, b, seed, deviceSceneSpec(context, plan.pathTraceSpec, b)) {}
+
+    // `spec`: the plan's specialisation for this device, the pipeline's and the unit's.
+    PathTracePasses(gpu::Context& context, const Scene& scene, const RenderPlan& plan, const RenderBuffers& b,
+                    uint32_t seed, const std::vector<gpu::SpecConstant>& spec)
         : pipeline_(context, plannedEntry(plan, PassKind::PathTrace).shader, shader::kPathTraceBindingCount, uint32_t(sizeof(shader::PathTracePush)),
-                    deviceSceneSpec(context, plan.pathTraceSpec, b), kPathTraceUniformBindings, kSceneTexelBindings) {
+                    spec, kPathTraceUniformBindings, kSceneTexelBindings) {
         pipeline_.bindBuffers(b.sceneBindings(context, true));
         uint32_t bruteForcePrims = 0;  // > 0: rays test every primitive (no BVH walk)
-        for (const auto& s : deviceSceneSpec(context, plan.pathTraceSpec, b)) {
+        for (const auto& s : spec) {
             if (s.id == shader::kSpecLoopBudget && s.value != 0) loopBudget_ = s.value;
             if (s.id == shader::kSpecBruteForcePrims) bruteForcePrims = s.value;
         }
@@ -284,9 +289,9 @@ public:
         // Measured against 16, interleaved (docs/BENCHMARKS.tungsten-notes.md): the volumetric
         // caustic 1.10x paths/s at 64; the Cornell box 1.12x at 28 (1.14x at 64, a few paths
         // carried); Tungsten's water surface 1.03-1.12x at 32 but 0.79-0.96x at 64, where a
-        // third of its paths passed the budget and were carried (Stability.DispatchUnitIsTheLoopBudgetsRoom). Elsewhere, and for renders
-        // stopped by time (an unfinished dispatch overshoots the limit), about a million paths,
-        // at most 16 samples.
+        // third of its paths passed the budget and were carried
+        // (Stability.DispatchUnitIsTheLoopBudgetsRoom). Elsewhere, and for renders stopped by
+        // time (an unfinished dispatch overshoots the limit), about a million paths, at most 16.
         const uint64_t pixels = uint64_t(cam.width) * cam.height;
         auto perDispatch = [&](uint64_t paths, uint64_t most) {
             return uint32_t(std::clamp<uint64_t>(paths / std::max<uint64_t>(pixels, 1), 1, most));
