@@ -36,7 +36,7 @@ vec3 shadingNormal(uint prim, vec2 bary, vec3 ng) {
 // uv; kHasTextures folds all of it out of scenes without textures).
 void applyTextures(inout MaterialGpu m, Prim pr, uint slot, vec2 bary, vec3 p) {
     if (m.albedoTexture == kNoTexture && m.roughnessTexture == kNoTexture) return;
-    vec2 uv = primUv(slot, pr.type, bary, p, pr.p0);
+    vec2 uv = primUv(slot, primShape(pr), bary, p, pr.p0);
     if (m.albedoTexture != kNoTexture) {
         m.albedo = textureValue(m.albedoTexture, uv);
         // Plastics: the substrate's share of the sampling follows the albedo (layered.h).
@@ -204,7 +204,7 @@ bool sampleLight(vec3 p, inout Rng rng, out LightSample ls) { return sampleLight
 const bool kHasPassThrough = (kBsdfFamilies & kFamilyPassThrough) != 0u;
 
 vec3 primNormalAt(Prim pr, vec3 p) {
-    if (kHasSpheres && pr.type == kPrimSphere) return normalize(p - pr.p0);
+    if (kHasSpheres && primShape(pr) == kPrimSphere) return normalize(p - pr.p0);
     return pr.n;
 }
 

@@ -70,6 +70,8 @@ Prim scenePrim(uint i) {
 #define BVH_PRIM(i) scenePrim(i)
 #define BVH_BRUTE_FORCE_PRIMS kBruteForcePrims
 #define BVH_BRUTE_FORCE_CURVED kBruteForceCurved
+#define BVH_TIE_RANKS kTieRanks
+#define BVH_TIE_DISTANCE kRayEpsilon
 #define BVH_UNROLL [[unroll]]  // GL_EXT_control_flow_attributes (every includer enables it)
 // BVH walks whose stack fits kMaxRegisterBvhStack entries keep it in registers (shared/intersect.h).
 #define BVH_STACK_LENGTH (kBvhStackNeed != 0u ? kBvhStackNeed : kBvhStackSize)

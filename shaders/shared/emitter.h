@@ -12,13 +12,13 @@ SHADER_NAMESPACE_BEGIN
 // spheres). `spheres` and `disks` say whether the scene has those prim types (specialisation
 // constants in GLSL), so absent types cost nothing.
 FN void sampleEmitterPoint(Prim pr, bool spheres, bool disks, float u1, float u2, OUT(vec3) q, OUT(vec3) nq) {
-    if (spheres && pr.type == kPrimSphere) {
+    if (spheres && primShape(pr) == kPrimSphere) {
         nq = sampleUniformSphere(u1, u2);
         q = pr.p0 + nq * pr.p1.x;
-    } else if (disks && pr.type == kPrimDisk) {
+    } else if (disks && primShape(pr) == kPrimDisk) {
         q = sampleDisk(pr.p0, pr.n, pr.p1.x, u1, u2);
         nq = pr.n;
-    } else if (pr.type == kPrimQuad) {
+    } else if (primShape(pr) == kPrimQuad) {
         q = sampleParallelogram(pr.p0, pr.p1, pr.p2, u1, u2);
         nq = pr.n;
     } else {

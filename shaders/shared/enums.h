@@ -13,6 +13,12 @@ CONST uint kPrimTriangle = 0u;
 CONST uint kPrimSphere = 1u;
 CONST uint kPrimDisk = 2u;
 CONST uint kPrimQuad = 3u;  // parallelogram p0 + [0,1] (p1 - p0) + [0,1] (p2 - p0), analytic
+// Prim.type holds the shape (above) in its low byte (primShape) and flags above it:
+// kPrimInterface marks a surface that only separates two media (a smooth or rough dielectric, a
+// forward medium boundary). Where such a surface coincides with another one (water resting on a
+// floor, a medium's box on a wall), a ray hits the other: shared/intersect.h "Coincident surfaces".
+CONST uint kPrimShapeMask = 0xffu;
+CONST uint kPrimInterface = 0x100u;
 
 // ---- Materials (BsdfType) ----
 CONST uint kBsdfLambert = 0u;

@@ -18,6 +18,7 @@ struct Prim {
     vec3 p2; int light;      // index into the light table, -1 if not emissive
     vec3 n;  float area;
 };
+FN uint primShape(Prim p) { return p.type & kPrimShapeMask; }  // kPrim*, without the flags
 
 // BVH node with four children (src/scene/bvh.h collapseBvh; 64 bytes, 4 texels). Child c's box is
 // origin + q * scale per axis, q the byte c of the quantised bounds (qLo.x: lo.x, qLo.y: lo.y,

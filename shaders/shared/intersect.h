@@ -12,11 +12,28 @@
 //   BVH_BRUTE_FORCE_CURVED   optional, with it: a constant whose bit i is set where slot i is a
 //                            sphere or disk: the planar slots are tested by the planar test alone,
 //                            the curved ones after them;
-//   BVH_UNROLL               optional: the brute-force loops' attribute ([[unroll]] in GLSL).
+//   BVH_UNROLL               optional: the brute-force loops' attribute ([[unroll]] in GLSL);
+//   BVH_TIE_RANKS            optional: a bool constant, true where some primitive carries
+//                            kPrimInterface (the ranks below are then read; false: every prim
+//                            ranks alike and the walk is the plain closest-hit walk);
+//   BVH_TIE_DISTANCE         optional, with it: hits this close along the ray are coincident.
 // Part 2 has internal linkage in C++, so each translation unit binds its own buffers.
 //
 // Rays are origin + t dir with dir non-zero (not necessarily unit); hits count for t strictly
 // inside (tMin, tMax). The traversal queries use tMin = 0: callers offset secondary origins.
+//
+// Coincident surfaces. Where two surfaces coincide (a water cube's bottom face on the floor it
+// stands on, a medium's box against a wall), which one a closest-hit query returns would depend on
+// rounding and on the order the walk meets them, and that order differs between the BVH walk and
+// the brute-force loop: the path tracer and the photon passes of one scene saw different surfaces
+// (water on a floor: a camera chain that hit the water's bottom face left the water below the floor
+// and was lost, the photon-mapped floor 25-40% dark against the path tracer). The rule, the same for
+// every walk: hits within BVH_TIE_DISTANCE of each other along the ray are ordered by rank first,
+// the surface that only separates two media (kPrimInterface: a dielectric's or a medium's
+// boundary, rank 1) behind any other (rank 0): where water touches a floor the light in the water
+// meets the floor, there is no water-air interface between them. Otherwise the nearer hit wins.
+// BVH_TIE_DISTANCE is the ray offset (kRayEpsilon), the scale below which the renderer does not
+// resolve two surfaces anyway: a ray leaving one starts beyond the other.
 #ifndef TELESCOPE_INTERSECT_H
 #define TELESCOPE_INTERSECT_H
 
@@ -233,10 +250,10 @@ SHADER_NAMESPACE_BEGIN
 // A sphere or disk primitive; each branch vanishes when its constant is false.
 TRACE_FN bool intersectCurved(Prim p, vec3 origin, vec3 dir, float tMin, float tMax, OUT(float) t) {
     if (kHasSpheres) {
-        if (p.type == kPrimSphere) return intersectSphere(origin, dir, p.p0, p.p1.x, tMin, tMax, t);
+        if (primShape(p) == kPrimSphere) return intersectSphere(origin, dir, p.p0, p.p1.x, tMin, tMax, t);
     }
     if (kHasDisks) {
-        if (p.type == kPrimDisk) return intersectDisk(origin, dir, p.p0, p.p1.x, p.n, tMin, tMax, t);
+        if (primShape(p) == kPrimDisk) return intersectDisk(origin, dir, p.p0, p.p1.x, p.n, tMin, tMax, t);
     }
     return false;
 }
@@ -246,9 +263,31 @@ TRACE_FN bool intersectCurved(Prim p, vec3 origin, vec3 dir, float tMin, float t
 TRACE_FN bool intersectPrim(Prim p, vec3 origin, vec3 dir, float tMin, float tMax, OUT(float) t,
                             OUT(vec2) bary) {
     bary = vec2(0.0f);
-    if (p.type == kPrimTriangle || p.type == kPrimQuad)
-        return intersectPlanar(origin, dir, p.p0, p.p1, p.p2, p.type == kPrimQuad, tMin, tMax, t, bary);
+    uint shape = primShape(p);
+    if (shape == kPrimTriangle || shape == kPrimQuad)
+        return intersectPlanar(origin, dir, p.p0, p.p1, p.p2, shape == kPrimQuad, tMin, tMax, t, bary);
     return intersectCurved(p, origin, dir, tMin, tMax, t);
+}
+
+#ifndef BVH_TIE_RANKS
+#define BVH_TIE_RANKS false
+#define BVH_TIE_DISTANCE 0.0f
+#endif
+
+// The rank of a primitive in ties (see "Coincident surfaces" above): 1 for an interface, else 0.
+TRACE_FN uint tieRank(Prim p) { return BVH_TIE_RANKS && (p.type & kPrimInterface) != 0u ? 1u : 0u; }
+
+// How far along the ray a primitive of rank `rank` may lie and still replace the closest hit so
+// far (hit.t, of rank `hitRank`): a lower rank wins ties, a higher one must be nearer by more than
+// the tie distance; never beyond the query's tMax, which is the limit while nothing is hit.
+TRACE_FN float tieLimit(Hit hit, uint hitRank, uint rank, float tMax) {
+    if (!BVH_TIE_RANKS || hit.prim == kNoPrim || rank == hitRank) return hit.t;
+    return rank < hitRank ? min(hit.t + BVH_TIE_DISTANCE, tMax) : hit.t - BVH_TIE_DISTANCE;
+}
+
+// How far the walk must still look: a closer hit of any rank, or one of rank 0 tying an interface.
+TRACE_FN float walkReach(Hit hit, uint hitRank, float tMax) {
+    return hitRank != 0u ? min(hit.t + BVH_TIE_DISTANCE, tMax) : hit.t;
 }
 
 // A box test's result for a child the ray misses (above every tMax a query passes, kInfinity).
@@ -286,6 +325,7 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
     hit.t = tMax;
     hit.prim = kNoPrim;
     hit.bary = vec2(0.0f);
+    uint hitRank = 0u;  // tieRank of hit.prim
     if (BVH_BRUTE_FORCE_PRIMS > 0u) {
         // Every primitive in turn: a loop of constant length over uniform data, with no stack.
         LOOP_BUDGET_TICK(BVH_BRUTE_FORCE_PRIMS);
@@ -298,21 +338,27 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
                 Prim p = BVH_PRIM(i);
                 float t = 0.0f;
                 vec2 bary = vec2(0.0f);
-                if (intersectPlanar(origin, dir, p.p0, p.p1, p.p2, p.type == kPrimQuad, 0.0f, hit.t, t, bary)) {
+                uint rank = tieRank(p);
+                if (intersectPlanar(origin, dir, p.p0, p.p1, p.p2, primShape(p) == kPrimQuad, 0.0f,
+                                    tieLimit(hit, hitRank, rank, tMax), t, bary)) {
                     hit.t = t;
                     hit.prim = i;
                     hit.bary = bary;
+                    hitRank = rank;
                     if (anyHit) return true;
                 }
             }
         }
         BVH_UNROLL for (uint i = 0u; i < BVH_BRUTE_FORCE_PRIMS; ++i) {
             if (((BVH_BRUTE_FORCE_CURVED >> i) & 1u) != 0u) {
+                Prim p = BVH_PRIM(i);
                 float t = 0.0f;
-                if (intersectCurved(BVH_PRIM(i), origin, dir, 0.0f, hit.t, t)) {
+                uint rank = tieRank(p);
+                if (intersectCurved(p, origin, dir, 0.0f, tieLimit(hit, hitRank, rank, tMax), t)) {
                     hit.t = t;
                     hit.prim = i;
                     hit.bary = vec2(0.0f);
+                    hitRank = rank;
                     if (anyHit) return true;
                 }
             }
@@ -320,12 +366,15 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
         return hit.prim != kNoPrim;
 #endif
         for (uint i = 0u; i < BVH_BRUTE_FORCE_PRIMS; ++i) {
+            Prim p = BVH_PRIM(i);
             float t = 0.0f;
             vec2 bary = vec2(0.0f);
-            if (intersectPrim(BVH_PRIM(i), origin, dir, 0.0f, hit.t, t, bary)) {
+            uint rank = tieRank(p);
+            if (intersectPrim(p, origin, dir, 0.0f, tieLimit(hit, hitRank, rank, tMax), t, bary)) {
                 hit.t = t;
                 hit.prim = i;
                 hit.bary = bary;
+                hitRank = rank;
                 if (anyHit) return true;
             }
         }
@@ -347,22 +396,26 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
             uint first = bvhLeafFirst(ref);
             uint end = first + bvhLeafCount(ref);
             for (uint i = first; i < end; ++i) {
+                Prim p = BVH_PRIM(i);
                 float t = 0.0f;
                 vec2 bary = vec2(0.0f);
-                if (intersectPrim(BVH_PRIM(i), origin, dir, 0.0f, hit.t, t, bary)) {
+                uint rank = tieRank(p);
+                if (intersectPrim(p, origin, dir, 0.0f, tieLimit(hit, hitRank, rank, tMax), t, bary)) {
                     hit.t = t;
                     hit.prim = i;
                     hit.bary = bary;
+                    hitRank = rank;
                     if (anyHit) return true;
                 }
             }
         } else {
             // Inner node: the four boxes from one node's load, sorted by entry (a sorting network)
             BvhNode node = BVH_NODE(ref);
-            float t0 = childEntry(node, 0u, origin, invDir, hit.t);
-            float t1 = childEntry(node, 1u, origin, invDir, hit.t);
-            float t2 = childEntry(node, 2u, origin, invDir, hit.t);
-            float t3 = childEntry(node, 3u, origin, invDir, hit.t);
+            float reach = walkReach(hit, hitRank, tMax);
+            float t0 = childEntry(node, 0u, origin, invDir, reach);
+            float t1 = childEntry(node, 1u, origin, invDir, reach);
+            float t2 = childEntry(node, 2u, origin, invDir, reach);
+            float t3 = childEntry(node, 3u, origin, invDir, reach);
             uint r0 = node.child.x, r1 = node.child.y, r2 = node.child.z, r3 = node.child.w;
             orderPair(t0, r0, t1, r1);
             orderPair(t2, r2, t3, r3);
@@ -394,7 +447,7 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
             uint entry;
             float entryT;
             BVH_STACK_READ(sp, entry, entryT);
-            if (entryT <= hit.t) {
+            if (entryT <= walkReach(hit, hitRank, tMax)) {
                 ref = entry;
                 popped = true;
             }
@@ -420,7 +473,7 @@ TRACE_FN bool traceAny(vec3 origin, vec3 dir, float tMax) {
 TRACE_FN void hitPoint(Prim pr, vec3 origin, vec3 dir, float t, OUT(vec3) p, OUT(vec3) ng) {
     p = origin + dir * t;
     ng = pr.n;
-    if (kHasSpheres && pr.type == kPrimSphere) {
+    if (kHasSpheres && primShape(pr) == kPrimSphere) {
         ng = normalize(p - pr.p0);
         p = pr.p0 + ng * pr.p1.x;
     }

@@ -47,6 +47,7 @@
     X(kSpecSmoothNormals,    25, bool,  kSmoothNormals,    false,       "some triangle is smooth-shaded: read kBindingShadingNormals") \
     X(kSpecLoopBudget,       26, uint,  kLoopBudget,       0u,          "loop iterations a path_trace lane may run per dispatch (0: no limit)") \
     X(kSpecSceneTexels,      27, bool,  kSceneTexels,      false,       "the scene read from the texel bindings, not from storage buffers") \
+    X(kSpecTieRanks,         31, bool,  kTieRanks,         true,        "some primitive is an interface (kPrimInterface) that a coincident surface hides") \
     X(kSpecBvhStackNeed,     30, uint,  kBvhStackNeed,     0u,          "n > 0: a BVH walk never holds more than n pending entries (its stack lives in registers)") \
     X(kSpecPointLights,      29, bool,  kHasPointLights,   true,        "point lights present") \
     X(kSpecBruteForceCurved, 28, uint,  kBruteForceCurved, 0u,          "brute-force rays: bit i set where primitive slot i is a sphere or disk (tested apart from the planar ones)") \

@@ -163,6 +163,14 @@ double plasticDiffuseFresnel(float ior) {
     return sum;
 }
 
+// A surface that only separates two media: a dielectric that refracts, a rough dielectric, a
+// forward (index-matched) medium boundary. Where one coincides with another surface the ray hits
+// the other (kPrimInterface; shared/intersect.h "Coincident surfaces"). Composites are not.
+bool isInterface(const shader::MaterialGpu& m) {
+    return (m.type == shader::kBsdfDielectric && (m.flags & shader::kMaterialRefraction) != 0u) ||
+           m.type == shader::kBsdfRoughDielectric || m.type == shader::kBsdfForward;
+}
+
 GpuScene buildGpuScene(const Scene& scene) {
     GpuScene out;
     SceneFeatures& f = out.features;
@@ -223,6 +231,10 @@ GpuScene buildGpuScene(const Scene& scene) {
         const Geometry& g = scene.geometry[bvh.order[slot]];
         shader::Prim p{};
         p.type = uint32_t(g.type);
+        if (isInterface(out.materials.at(g.material))) {
+            p.type |= shader::kPrimInterface;
+            f.interfaces = true;
+        }
         p.material = g.material;
         p.p0 = g.p0;
         const bool planar = g.type == GeometryType::Triangle || g.type == GeometryType::Quad;
@@ -360,7 +372,8 @@ GpuScene buildGpuScene(const Scene& scene) {
     f.bruteForcePrims = f.fitsUniforms && out.prims.size() <= shader::kMaxBruteForcePrims ? uint32_t(out.prims.size()) : 0u;
     static_assert(shader::kMaxBruteForcePrims <= 32u, "kSpecBruteForceCurved holds a bit per brute-force slot");
     for (uint32_t i = 0; i < f.bruteForcePrims; ++i)
-        if (out.prims[i].type == shader::kPrimSphere || out.prims[i].type == shader::kPrimDisk) f.bruteForceCurved |= 1u << i;
+        if (shader::primShape(out.prims[i]) == shader::kPrimSphere || shader::primShape(out.prims[i]) == shader::kPrimDisk)
+            f.bruteForceCurved |= 1u << i;
     return out;
 }
 

@@ -35,6 +35,7 @@ struct SceneFeatures {
     uint32_t bruteForceCurved = 0; // with bruteForcePrims: bit i set where prim slot i is a sphere or disk
     uint32_t bvhStackNeed = 0;     // the BVH walk's most pending entries (bvhStackNeed)
     bool smoothNormals = false;  // some mesh triangle is smooth-shaded (kSpecSmoothNormals)
+    bool interfaces = false;     // some prim is a kPrimInterface (kSpecTieRanks)
     bool textures = false;      // some material has a textured parameter
     uint32_t textureCount = 0;
 };

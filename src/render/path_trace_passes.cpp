@@ -158,6 +158,7 @@ void planPathTrace(const Scene& scene, const SceneFeatures& f, RenderPlan& plan)
         {kSpecBruteForcePrims, bruteForce},
         {kSpecBruteForceCurved, bruteForce > 0 ? f.bruteForceCurved : 0u},
         {kSpecBvhStackNeed, f.bvhStackNeed <= kMaxRegisterBvhStack ? std::max(f.bvhStackNeed, 1u) : 0u},
+        {kSpecTieRanks, f.interfaces},
         {kSpecTablesInUniforms, f.tablesFitUniforms},
         {kSpecBsdfFamilies, f.bsdfFamilies},
         {kSpecHasTextures, f.textures},

@@ -192,6 +192,7 @@ void planPhotons(const Scene& scene, const SceneFeatures& f, RenderPlan& plan) {
         {kSpecBruteForcePrims, f.bruteForcePrims},
         {kSpecBruteForceCurved, f.bruteForceCurved},
         {kSpecSmoothNormals, f.smoothNormals},
+        {kSpecTieRanks, f.interfaces && ph.testCoincidentSurfaces},
         {kSpecBsdfFamilies, f.bsdfFamilies},
         {kSpecHasTextures, f.textures},
         {kSpecEnvironmentLight, f.environmentLight},

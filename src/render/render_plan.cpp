@@ -90,6 +90,8 @@ std::vector<FeatureSwitch> sceneFeatureSwitches(const std::vector<gpu::SpecConst
         specSwitch(spec, "specular", kSpecHasSpecular, "no mirror, dielectric or conductor materials"),
         specSwitch(spec, "textures", kSpecHasTextures, "no textured materials"),
         specSwitch(spec, "smooth normals", kSpecSmoothNormals, "every triangle flat-shaded"),
+        specSwitch(spec, "interfaces", kSpecTieRanks, "no refracting dielectric or medium boundary", 0,
+                   "refracting dielectrics or medium boundaries present: a surface coinciding with one is hit first"),
         specSwitch(spec, "uniform scene", kSpecSceneInUniforms,
                    f.fitsUniforms ? "BVH walks read the scene from uniform texel buffers, which lavapipe gathers faster (the "
                                     "uniform scene serves brute-force rays)"

@@ -18,6 +18,8 @@ static std::vector<telescope::shader::BvhNode> nodes;
 static std::vector<telescope::shader::Prim> prims;
 static uint64_t nodeVisits = 0;
 static uint32_t bruteForcePrims = 0;  // > 0: the traversal's brute-force path (kSpecBruteForcePrims)
+static bool tieRanks = true;          // kSpecTieRanks: interfaces yield to coincident surfaces
+static float tieDistance = 1e-4f;     // kRayEpsilon of a scene of size 10
 }  // namespace bvh_test
 
 constexpr bool kHasSpheres = true;
@@ -26,6 +28,8 @@ constexpr bool kHasDisks = true;
 #define BVH_PRIM(i) (::bvh_test::prims.at(i))
 #define BVH_COUNT_NODE_VISIT() (++::bvh_test::nodeVisits)
 #define BVH_BRUTE_FORCE_PRIMS (::bvh_test::bruteForcePrims)
+#define BVH_TIE_RANKS (::bvh_test::tieRanks)
+#define BVH_TIE_DISTANCE (::bvh_test::tieDistance)
 #include "shared/intersect.h"
 
 namespace telescope {
@@ -66,11 +70,11 @@ Prim disk(vec3 centre, float radius, vec3 normal) {
 
 Aabb boundsOf(const Prim& p) {
     Aabb b;
-    if (p.type == shader::kPrimTriangle) {
+    if (shader::primShape(p) == shader::kPrimTriangle) {
         b.extend(p.p0);
         b.extend(p.p1);
         b.extend(p.p2);
-    } else if (p.type == shader::kPrimSphere) {
+    } else if (shader::primShape(p) == shader::kPrimSphere) {
         b.extend(p.p0 - vec3(p.p1.x));
         b.extend(p.p0 + vec3(p.p1.x));
     } else {
@@ -676,6 +680,101 @@ TEST(Bvh, BruteForcePathMatchesBruteForce) {
             EXPECT_GT(hits, 0);
             bvh_test::bruteForcePrims = 0;
         }
+    }
+}
+
+// ---- Coincident surfaces (shared/intersect.h) ----
+
+// A water cube resting on a tiled floor: the cube's bottom face (two triangles, kPrimInterface)
+// lies in the floor's plane (32 triangles of another tiling, so each hit's t rounds its own way).
+// Rays from inside the water going down must hit the floor in the BVH walk and in the brute-force
+// loop, whatever order either meets the two surfaces in; rays from above must still hit the
+// water's top, which nothing else touches. Control: without ranks (the old rule, nearest t wins,
+// the first found on an exact tie) a good part of the downward rays hit the water's bottom in one
+// walk or the other.
+struct TieScene {
+    std::vector<Prim> prims;
+    uint32_t floorCount = 0;  // prims [0, floorCount) are the floor
+};
+
+TieScene waterOnFloor(Random& r) {
+    TieScene s;
+    for (int i = 0; i < 4; ++i)
+        for (int k = 0; k < 4; ++k) {
+            float x0 = -1.0f + 0.5f * float(i), z0 = -1.0f + 0.5f * float(k), x1 = x0 + 0.5f, z1 = z0 + 0.5f;
+            s.prims.push_back(triangle(vec3(x0, 0.0f, z0), vec3(x1, 0.0f, z0), vec3(x1, 0.0f, z1)));
+            s.prims.push_back(triangle(vec3(x0, 0.0f, z0), vec3(x1, 0.0f, z1), vec3(x0, 0.0f, z1)));
+        }
+    s.floorCount = uint32_t(s.prims.size());
+    const float h = 0.93f, top = 0.6f;
+    auto face = [&](vec3 a, vec3 b, vec3 c, vec3 d) {
+        for (Prim p : {triangle(a, b, c), triangle(a, c, d)}) {
+            p.type |= shader::kPrimInterface;
+            s.prims.push_back(p);
+        }
+    };
+    face(vec3(-h, 0.0f, -h), vec3(h, 0.0f, -h), vec3(h, 0.0f, h), vec3(-h, 0.0f, h));  // bottom
+    face(vec3(-h, top, -h), vec3(h, top, -h), vec3(h, top, h), vec3(-h, top, h));      // top
+    face(vec3(-h, 0.0f, -h), vec3(-h, top, -h), vec3(-h, top, h), vec3(-h, 0.0f, h));
+    face(vec3(h, 0.0f, -h), vec3(h, top, -h), vec3(h, top, h), vec3(h, 0.0f, h));
+    face(vec3(-h, 0.0f, -h), vec3(h, 0.0f, -h), vec3(h, top, -h), vec3(-h, top, -h));
+    face(vec3(-h, 0.0f, h), vec3(h, 0.0f, h), vec3(h, top, h), vec3(-h, top, h));
+    for (int i = 0; i < 12; ++i) s.prims.push_back(sphere(r.point(3.0f) + vec3(0.0f, 5.0f, 0.0f), 0.3f));  // clutter
+    return s;
+}
+
+// Downward rays from inside the water that cross the floor's plane well inside the cube: the
+// number whose closest hit is not the floor, in the BVH walk and in the brute-force loop.
+std::pair<int, int> downwardMisses(const TieScene& t, const Scene& s, Random& r, int count) {
+    int walk = 0, brute = 0;
+    for (int n = 0; n < count; ++n) {
+        vec3 o(r.uniform(-0.8f, 0.8f), r.uniform(0.01f, 0.59f), r.uniform(-0.8f, 0.8f));
+        vec3 d = r.direction();
+        d.y = -std::abs(d.y) - 0.05f;
+        vec3 cross = o - d * (o.y / d.y);
+        if (std::abs(cross.x) > 0.9f || std::abs(cross.z) > 0.9f) {
+            --n;
+            continue;
+        }
+        for (uint32_t brutePrims : {0u, uint32_t(bvh_test::prims.size())}) {
+            bvh_test::bruteForcePrims = brutePrims;
+            Hit hit{};
+            bool found = shader::traceClosest(o, d, shader::kInfinity, hit);
+            bool floor = found && s.bvh.order.at(hit.prim) < t.floorCount;
+            (brutePrims == 0u ? walk : brute) += !floor;
+        }
+        bvh_test::bruteForcePrims = 0;
+    }
+    return {walk, brute};
+}
+
+TEST(Bvh, CoincidentInterfaceYieldsToTheSurfaceItTouchesInEveryWalk) {
+    for (uint32_t seed : {1u, 2u, 3u}) {
+        Random r(900 + seed);
+        TieScene t = waterOnFloor(r);
+        std::shuffle(t.prims.begin() + t.floorCount, t.prims.end(), r.rng);  // the floor stays first in input
+        Scene s = load(t.prims, 2);
+        auto [walk, brute] = downwardMisses(t, s, r, 2000);
+        EXPECT_EQ(walk, 0) << "seed " << seed << ": BVH walks that hit the water's bottom, not the floor";
+        EXPECT_EQ(brute, 0) << "seed " << seed << ": brute-force rays that hit the water's bottom";
+
+        // Rays from above through the top: the water's top face, 0.6 above the floor, is hit.
+        int tops = 0;
+        for (int n = 0; n < 500; ++n) {
+            vec3 o(r.uniform(-0.5f, 0.5f), 2.0f, r.uniform(-0.5f, 0.5f));
+            Hit hit{};
+            ASSERT_TRUE(shader::traceClosest(o, vec3(0.0f, -1.0f, 0.1f * r.uniform(-1.0f, 1.0f)), shader::kInfinity, hit));
+            tops += std::abs(hit.t - 1.4f) < 1e-2f && (bvh_test::prims.at(hit.prim).type & shader::kPrimInterface) != 0u;
+        }
+        EXPECT_EQ(tops, 500) << "seed " << seed;
+
+        // The control: nearest t wins, ties to the first found.
+        bvh_test::tieRanks = false;
+        auto [oldWalk, oldBrute] = downwardMisses(t, s, r, 2000);
+        bvh_test::tieRanks = true;
+        EXPECT_GE(oldWalk + oldBrute, 200) << "seed " << seed << ": the control hit the floor nearly always";
+        std::printf("seed %u: without ranks %d of 2000 walks and %d brute-force rays hit the water's bottom\n",
+                    seed, oldWalk, oldBrute);
     }
 }
 
