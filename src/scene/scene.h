@@ -275,6 +275,10 @@ struct PhotonSettings {
     // Test-only ("test_gather_cosine"): true weights each photon at a glossy gather vertex by
     // f |cos wo| instead of f (the cosine counted twice: the positive control of the glossy tests).
     bool testGatherCosine = false;
+    // Test-only ("test_coincident_surfaces"): false lets the photon passes resolve coincident
+    // surfaces by the order their walks meet them, the old rule (shared/intersect.h "Coincident
+    // surfaces"): the positive control of the refraction geometry tests.
+    bool testCoincidentSurfaces = true;
 };
 // "transmittance_estimator": {"type": ..., "level": k, "pmf": {...}} (docs/MEDIA.md).
 struct TransmittanceEstimatorSettings {

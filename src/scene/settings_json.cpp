@@ -58,6 +58,7 @@ void to_json(json& j, const PhotonSettings& p) {
          {"gather_photon_count", p.gatherCount}};
     if (!p.testRadianceScaling) j["test_radiance_scaling"] = false;
     if (p.testGatherCosine) j["test_gather_cosine"] = true;
+    if (!p.testCoincidentSurfaces) j["test_coincident_surfaces"] = false;
 }
 
 // ---- Integrator ----

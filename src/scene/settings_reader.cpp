@@ -211,11 +211,14 @@ void SceneReader::readPhotonSettings(const json& v, const std::string& key) {
     if (const json* t = find(v, "test_radiance_scaling"))
         p.testRadianceScaling = boolean(*t, "integrator.test_radiance_scaling");
     if (const json* t = find(v, "test_gather_cosine")) p.testGatherCosine = boolean(*t, "integrator.test_gather_cosine");
+    if (const json* t = find(v, "test_coincident_surfaces"))
+        p.testCoincidentSurfaces = boolean(*t, "integrator.test_coincident_surfaces");
     onlyBoolean(v, key, "enable_consistency_checks", false,
                 "Telescope does not drop paths whose shading and geometric normals disagree (Tungsten's checks)");
     ignoreUnread(v, key, {"type", "min_bounces", "max_bounces", "enable_two_sided_shading", "photon_count",
                           "gather_radius", "alpha", "kernel", "direct_lighting", "debias", "gather_photon_count",
-                          "test_radiance_scaling", "test_gather_cosine", "enable_consistency_checks"});
+                          "test_radiance_scaling", "test_gather_cosine", "test_coincident_surfaces",
+                          "enable_consistency_checks"});
 }
 
 // Photon mapping's blocks (docs/PHOTON-MAPPING.md): the geometric level pmf (r = 0.7 by default,
