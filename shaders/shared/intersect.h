@@ -290,6 +290,14 @@ TRACE_FN float walkReach(Hit hit, uint hitRank, float tMax) {
     return hitRank != 0u ? min(hit.t + BVH_TIE_DISTANCE, tMax) : hit.t;
 }
 
+// A primitive's hit at t (bary for planar ones) becomes the closest so far.
+TRACE_FN void takeHit(INOUT(Hit) hit, INOUT(uint) hitRank, float t, uint prim, vec2 bary, uint rank) {
+    hit.t = t;
+    hit.prim = prim;
+    hit.bary = bary;
+    hitRank = rank;
+}
+
 // A box test's result for a child the ray misses (above every tMax a query passes, kInfinity).
 CONST float kBoxMiss = 3.4e38f;
 
@@ -341,10 +349,7 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
                 uint rank = tieRank(p);
                 if (intersectPlanar(origin, dir, p.p0, p.p1, p.p2, primShape(p) == kPrimQuad, 0.0f,
                                     tieLimit(hit, hitRank, rank, tMax), t, bary)) {
-                    hit.t = t;
-                    hit.prim = i;
-                    hit.bary = bary;
-                    hitRank = rank;
+                    takeHit(hit, hitRank, t, i, bary, rank);
                     if (anyHit) return true;
                 }
             }
@@ -355,10 +360,7 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
                 float t = 0.0f;
                 uint rank = tieRank(p);
                 if (intersectCurved(p, origin, dir, 0.0f, tieLimit(hit, hitRank, rank, tMax), t)) {
-                    hit.t = t;
-                    hit.prim = i;
-                    hit.bary = vec2(0.0f);
-                    hitRank = rank;
+                    takeHit(hit, hitRank, t, i, vec2(0.0f), rank);
                     if (anyHit) return true;
                 }
             }
@@ -371,10 +373,7 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
             vec2 bary = vec2(0.0f);
             uint rank = tieRank(p);
             if (intersectPrim(p, origin, dir, 0.0f, tieLimit(hit, hitRank, rank, tMax), t, bary)) {
-                hit.t = t;
-                hit.prim = i;
-                hit.bary = bary;
-                hitRank = rank;
+                takeHit(hit, hitRank, t, i, bary, rank);
                 if (anyHit) return true;
             }
         }
@@ -401,10 +400,7 @@ TRACE_FN bool traceRay(vec3 origin, vec3 dir, float tMax, bool anyHit, OUT(Hit) 
                 vec2 bary = vec2(0.0f);
                 uint rank = tieRank(p);
                 if (intersectPrim(p, origin, dir, 0.0f, tieLimit(hit, hitRank, rank, tMax), t, bary)) {
-                    hit.t = t;
-                    hit.prim = i;
-                    hit.bary = bary;
-                    hitRank = rank;
+                    takeHit(hit, hitRank, t, i, bary, rank);
                     if (anyHit) return true;
                 }
             }

@@ -166,7 +166,7 @@ double plasticDiffuseFresnel(float ior) {
 // A surface that only separates two media: a dielectric that refracts, a rough dielectric, a
 // forward (index-matched) medium boundary. Where one coincides with another surface the ray hits
 // the other (kPrimInterface; shared/intersect.h "Coincident surfaces"). Composites are not.
-bool isInterface(const shader::MaterialGpu& m) {
+static bool isInterface(const shader::MaterialGpu& m) {
     return (m.type == shader::kBsdfDielectric && (m.flags & shader::kMaterialRefraction) != 0u) ||
            m.type == shader::kBsdfRoughDielectric || m.type == shader::kBsdfForward;
 }
